@@ -1,0 +1,1 @@
+"""Shared pytest setup. Markers (slow, browser, cluster) are declared in pyproject.toml."""
