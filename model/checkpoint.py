@@ -1,0 +1,107 @@
+"""Checkpoints: `model.safetensors` (weights) + `meta.json` (config, mode, assemblies, seed, split,
+metrics, lexicon, T_a) + optional `training_csc.safetensors` (the learned c_0 / c_T tables, for
+the Csc explorer). Loading never unpickles. Writing is atomic: everything goes into a temporary
+sibling directory that then replaces `directory` in one rename.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import torch
+from safetensors.torch import load_file, save_file
+
+from model.config import MultiMTRNNConfig
+from model.multimtrnn import ASSEMBLIES, MultiMTRNN
+
+WEIGHTS = "model.safetensors"
+META = "meta.json"
+TRAINING_CSC = "training_csc.safetensors"
+FORMAT_VERSION = 1
+
+
+def _jsonable(value):
+    """numpy scalars/arrays -> plain Python, recursively."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def save(
+    model: MultiMTRNN,
+    directory: str | Path,
+    meta: dict | None = None,
+    training_csc: dict[str, np.ndarray] | None = None,
+) -> Path:
+    """Write a checkpoint into `directory` (replaced atomically if it exists)."""
+    directory = Path(directory)
+    directory.parent.mkdir(parents=True, exist_ok=True)
+    full_meta = dict(_jsonable(meta or {}))
+    full_meta.update(
+        {
+            "format": FORMAT_VERSION,
+            "config": model.config.to_dict(),
+            "assemblies": model.assemblies_spec(),
+            "generation_steps": model.config.generation_steps,
+        }
+    )
+    tmp = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+    try:
+        state = {k: v.detach().contiguous().clone() for k, v in model.state_dict().items()}
+        save_file(state, str(tmp / WEIGHTS))
+        if training_csc:
+            save_file(
+                {k: torch.as_tensor(np.ascontiguousarray(v)) for k, v in training_csc.items()},
+                str(tmp / TRAINING_CSC),
+            )
+        (tmp / META).write_text(json.dumps(full_meta, indent=2, sort_keys=True))
+        if directory.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{directory.name}.old.", dir=directory.parent))
+            os.replace(directory, old / "x")
+            os.replace(tmp, directory)
+            shutil.rmtree(old)
+        else:
+            os.replace(tmp, directory)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return directory
+
+
+def load(directory: str | Path) -> tuple[MultiMTRNN, dict]:
+    """Rebuild the model from `meta.json` and load its weights (no pickle anywhere)."""
+    directory = Path(directory)
+    meta = json.loads((directory / META).read_text())
+    config = MultiMTRNNConfig.from_dict(meta["config"])
+    spec = meta["assemblies"]
+    if spec["kind"] not in ASSEMBLIES:
+        # Modes that define their own assemblies register them on import.
+        from model.training import available_modes
+
+        available_modes()
+    if spec["kind"] not in ASSEMBLIES:
+        raise ValueError(f"checkpoint needs assemblies kind {spec['kind']!r}; known: {sorted(ASSEMBLIES)}")
+    assemblies = ASSEMBLIES[spec["kind"]](**spec["kwargs"])
+    model = MultiMTRNN(config, assemblies=assemblies)
+    model.load_state_dict(load_file(str(directory / WEIGHTS)))
+    model.eval()
+    return model, meta
+
+
+def load_training_csc(directory: str | Path) -> dict[str, np.ndarray]:
+    """The learned training tables (c_0 of MTRNN_a, c_T of the encoders), empty if not saved."""
+    path = Path(directory) / TRAINING_CSC
+    if not path.exists():
+        return {}
+    return {k: v.numpy() for k, v in load_file(str(path)).items()}

@@ -1,0 +1,116 @@
+"""Configuration of the MultiMTRNN: every hyper-parameter with the paper's default (Table 1)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Literal
+
+# Scaled logistic of the paper (3.4.3, after Heinrich & Wermter 2014), see `model.mtrnn.scaled_logistic`.
+KAPPA_H = 0.35795  # range: f spans (-kappa_h, 1 + kappa_h)
+KAPPA_W = 0.92  # slope
+
+
+@dataclass
+class MTRNNConfig:
+    """One MTRNN: IO, context-fast (Cf) and context-slow (Cs) layers with their timescales (eq. 3)."""
+
+    io: int  # |I_IO|: input (encoders) or output (generator) neurons
+    cf: int  # |I_Cf|
+    cs: int  # |I_Cs|
+    tau_io: float  # timescale of IO
+    tau_cf: float  # timescale of Cf
+    tau_cs: float  # timescale of Cs
+    csc: int = -1  # |I_Csc|; -1 means ceil(|I_Cs| / 2) as in 4.2
+    io_activation: Literal["softmax", "logistic"] = "logistic"  # softmax only on MTRNN_a's IO (3.4.3)
+    weight_init: float = 0.025  # W^0: weights drawn from U(-0.025, 0.025)
+    csc_init: float = 1.0  # C^0: c_0 (generator) from +-0.01, c_T (encoders) from +-1.0
+
+    def __post_init__(self) -> None:
+        if self.csc < 0:
+            self.csc = math.ceil(self.cs / 2)
+        if not 0 < self.csc <= self.cs:
+            raise ValueError(f"|Csc| must be in 1..|Cs|={self.cs}, got {self.csc}")
+
+    @property
+    def size(self) -> int:
+        return self.io + self.cf + self.cs
+
+
+def auditory_config(io: int | None = None) -> MTRNNConfig:
+    """MTRNN_a, the generator with context bias (Table 1).
+
+    Table 1 gives 44 IO neurons for the alphabet B; our B has 43 symbols (see
+    `model.encoding.utterance`), so the IO layer is sized len(PHONEMES) unless told otherwise.
+    """
+    if io is None:
+        from model.encoding.utterance import PHONEMES
+
+        io = len(PHONEMES)
+    return MTRNNConfig(io=io, cf=80, cs=23, tau_io=2, tau_cf=5, tau_cs=70, io_activation="softmax", csc_init=0.01)
+
+
+def somatosensory_config() -> MTRNNConfig:
+    """MTRNN_s, proprioception encoder with context abstraction (Table 1)."""
+    return MTRNNConfig(io=5, cf=40, cs=23, tau_io=2, tau_cf=5, tau_cs=50)
+
+
+def visual_config(io: int = 19) -> MTRNNConfig:
+    """MTRNN_v, vision encoder with context abstraction (Table 1)."""
+    return MTRNNConfig(io=io, cf=40, cs=23, tau_io=2, tau_cf=5, tau_cs=16)
+
+
+@dataclass
+class TrainingConfig:
+    """How the nets learn: the paper's RPROP variant (3.1.4) or Adam, full-batch BPTT."""
+
+    optimiser: Literal["rprop", "adam"] = "rprop"
+    lr: float = 0.05  # eta^0, beta^0, zeta^0: initial RPROP rates
+    xi_increase: float = 1.01  # xi+
+    xi_decrease: float = 0.96  # xi-
+    lr_min: float = 1e-6  # eta_min
+    lr_max: float = 1.0  # eta_max
+    adam_lr: float = 1e-2
+    alpha: float = 0.1  # teacher forcing of MTRNN_a (eq. 5)
+    psi_s: float = 5e-4  # self-organisation forcing of MTRNN_s (best in 4.3)
+    psi_v: float = 5e-5  # self-organisation forcing of MTRNN_v (Table 1)
+    epochs_auditory: int = 1500
+    epochs_somatosensory: int = 400
+    epochs_visual: int = 400
+    epochs_assemblies: int = 2000
+    progress_every: int = 10  # epochs between two progress reports
+    threads: int = 1  # torch.set_num_threads during training (one run per core is fastest)
+
+    def scaled(self, factor: float) -> TrainingConfig:
+        """The same recipe with every epoch count multiplied by `factor` (at least 1 epoch each)."""
+        d = asdict(self)
+        for key in d:
+            if key.startswith("epochs_"):
+                d[key] = max(1, round(d[key] * factor))
+        return TrainingConfig(**d)
+
+
+@dataclass
+class MultiMTRNNConfig:
+    """The whole architecture of Fig. 4."""
+
+    auditory: MTRNNConfig = field(default_factory=auditory_config)
+    somatosensory: MTRNNConfig = field(default_factory=somatosensory_config)
+    visual: MTRNNConfig = field(default_factory=visual_config)
+    training: TrainingConfig = field(default_factory=TrainingConfig)
+    # T_a of closed-loop generation: the longest training utterance's encoding + a margin. Set by
+    # training (`model.training.generation_steps`); stored here so a checkpoint carries it.
+    generation_steps: int = 60
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> MultiMTRNNConfig:
+        return cls(
+            auditory=MTRNNConfig(**d["auditory"]),
+            somatosensory=MTRNNConfig(**d["somatosensory"]),
+            visual=MTRNNConfig(**d["visual"]),
+            training=TrainingConfig(**d["training"]),
+            generation_steps=int(d.get("generation_steps", 60)),
+        )

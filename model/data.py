@@ -1,0 +1,34 @@
+"""What training needs to know about a set of recordings, and nothing about where they came from."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class SequenceSet:
+    """Encoded recordings: one entry per recording, sequences of varying length."""
+
+    proprioception: list[np.ndarray]  # each [T_i, 5] in [0, 1]
+    vision: list[np.ndarray]  # each [T_i, F] visual features (19 paper features, +2 centroid optional)
+    utterances: list[str]  # what the teacher said, e.g. "slide the red apple."
+    ids: list[str]  # recording ids, for reports and plots
+
+    def __post_init__(self) -> None:
+        n = len(self.ids)
+        if not (len(self.proprioception) == len(self.vision) == len(self.utterances) == n):
+            raise ValueError("proprioception, vision, utterances and ids must have one entry per recording")
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def subset(self, indices: list[int] | np.ndarray) -> SequenceSet:
+        idx = [int(i) for i in indices]
+        return SequenceSet(
+            [self.proprioception[i] for i in idx],
+            [self.vision[i] for i in idx],
+            [self.utterances[i] for i in idx],
+            [self.ids[i] for i in idx],
+        )

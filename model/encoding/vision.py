@@ -1,0 +1,361 @@
+"""Vision encoding (paper 4.1.1, Fig. 7): one camera frame -> shape, colour and position features.
+
+The pipeline, per frame (RGB uint8, any size):
+
+1. **Downscale** to ``VisionParams.work_width`` pixels wide (160 by default, aspect kept). Mean
+   shift is the expensive step (at 320x240 ``pyrMeanShiftFiltering`` costs ~83 ms with
+   ``maxLevel=0`` and ~27 ms with ``maxLevel=1``); at 160x120 with ``maxLevel=1`` the whole
+   pipeline stays within ~10 ms single-threaded.
+2. **Mean-shift segmentation** (Comaniciu & Meer 2002): ``cv2.pyrMeanShiftFiltering``.
+3. **Object mask by colour saturation**. The largest contour is not the object: the robot's arm
+   enters from the image border and merges with it. Instead the mean-shifted image is white
+   balanced against its own median colour (the table, which fills most of the view, becomes
+   grey whatever the light's colour or the table's tint), and the object is the *most saturated
+   sizeable region*: pixels with HSV saturation above ``max(min_saturation, saturation_fraction *
+   p99.5(saturation))``. A region touching the image border (the arm enters from there) has its
+   mean saturation multiplied by ``border_penalty``; the chosen region needs a (penalised) mean
+   saturation of at least ``min_saturation``, so a slightly tinted arm alone is not an object.
+4. **Canny edges** of the mean-shifted image cut regions that touch in the saturation mask; the
+   best piece is then grown back over the touching pixels of similar hue (so shading edges inside
+   the object do not cut it).
+5. **Contour finder** (Suzuki & Abe 1985): ``cv2.findContours`` on the object mask, upsampled to
+   the frame's full resolution; the largest external contour is the object's.
+6. **Centre of mass** from the contour's moments and **16 salient distances**: for each 22.5
+   degree sector around the centre of mass, the largest distance to a contour point in it (0 if
+   the contour has no point in the sector, e.g. the far side of a crescent whose centre of mass
+   lies outside it), scaled by the square root of the area, then rotated so that the largest comes
+   first, continuing clockwise (image coordinates, y down). When several sectors are within 8 %
+   of the largest (symmetric shapes: a rectangle's corners, a crescent's tips), the start is the
+   one followed by the larger distances clockwise, so the order does not flip with pixel noise.
+   The ratio d / sqrt(A) is about 0.56 for a disc, 0.71 at a square's corner and above 1 for
+   long shapes, so it is squashed into [0, 1) with ``1 - exp(-d / sqrt(A))`` (monotone, no
+   clipping, no tuning constant: disc 0.43, square corner 0.51, a 10:1 stick 0.79). Sectors are
+   fixed in the image, so the 16 values are only approximately rotation invariant (a concave
+   shape's gap can move by one sector).
+7. **Mean R, G, B** of the frame's pixels inside the contour, in [0, 1]. With
+   ``white_balance="grey_world"`` they are divided by the scene's white estimate (the per-channel
+   median of the mean-shifted frame, normalised to keep brightness), which removes a colour cast
+   of the light or camera; ``"none"`` is the paper's raw mean.
+8. **Centroid** (x / width, y / height) in [0, 1]: 2 optional extra values.
+
+Output: ``np.ndarray[21]`` float32, the paper's 19 values (``VISUAL_FEATURES``) then the centroid.
+
+No object found (no region saturated enough and large enough): :func:`extract_features` returns
+all zeros (no real object has a zero largest distance, so ``features[0] == 0`` flags it);
+:func:`encode_frames` replaces such frames by the features of the nearest earlier frame with an
+object (or the nearest later one at the start of a recording); a recording without any object
+stays all zeros. :func:`encode_frames_found` also returns which frames had an object.
+"""
+
+from __future__ import annotations
+
+import logging
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Literal
+
+import cv2
+import numpy as np
+
+logger = logging.getLogger(__name__)
+
+SECTORS = 16  # one per 22.5 degrees
+VISUAL_FEATURES = 19  # 16 distances + mean R, G, B: what the paper's MTRNN_v sees
+FEATURES = VISUAL_FEATURES + 2  # + centroid x, y
+MIN_SIDE = 16  # smallest frame side accepted, in pixels
+
+
+@dataclass(frozen=True)
+class VisionParams:
+    """Parameters of the Fig. 7 pipeline. Defaults were tuned on synthetic and rendered frames."""
+
+    work_width: int = 160  # frames are resized to this width (aspect kept) before mean shift
+    spatial_radius: int = 6  # mean shift spatial window (pixels at working resolution)
+    colour_radius: int = 24  # mean shift colour window
+    max_level: int = 1  # mean shift pyramid levels (0 is ~3x slower)
+    canny_low: int = 40  # Canny hysteresis thresholds on the mean-shifted grey image
+    canny_high: int = 100
+    min_saturation: float = 0.22  # floor of the object's saturation threshold (HSV S in [0, 1])
+    saturation_fraction: float = 0.5  # threshold relative to the 99.5th percentile saturation
+    min_value: float = 0.12  # pixels darker than this (HSV V in [0, 1]) have unreliable hue
+    hue_tolerance: float = 24.0  # degrees: pieces of similar hue are merged back into the object
+    min_area_fraction: float = 0.0015  # smallest object, as a fraction of the image
+    max_area_fraction: float = 0.5  # larger saturated regions are a coloured table, not an object
+    border_penalty: float = 0.5  # score factor for regions touching the image border (the arm)
+    white_balance: Literal["none", "grey_world"] = "grey_world"  # colour features; "none" = paper
+
+    def __post_init__(self) -> None:
+        if self.white_balance not in ("none", "grey_world"):
+            raise ValueError(f"white_balance must be 'none' or 'grey_world', got {self.white_balance!r}")
+        if self.work_width < MIN_SIDE:
+            raise ValueError(f"work_width must be at least {MIN_SIDE} pixels, got {self.work_width}")
+
+
+@dataclass
+class VisionSteps:
+    """The intermediate images of one frame, all at the frame's size, for the teaching pages."""
+
+    original: np.ndarray  # [H, W, 3] RGB uint8, the input
+    mean_shift: np.ndarray  # [H, W, 3] RGB uint8, mean-shift segmentation (computed at work_width)
+    saturation: np.ndarray  # [H, W] uint8, white-balanced saturation (0..255) the object is chosen by
+    edges: np.ndarray  # [H, W] uint8, Canny edges (255 on an edge)
+    object_mask: np.ndarray  # [H, W] uint8, the chosen object's pixels (255)
+    contour: np.ndarray  # [H, W, 3] RGB uint8, the original with the chosen contour drawn
+    rays: np.ndarray  # [H, W, 3] RGB uint8, centre of mass and the 16 salient distances drawn
+    features: np.ndarray  # [21] float32, as extract_features
+    found: bool  # whether an object was found (if not, features are zeros)
+
+
+@dataclass
+class _Result:
+    features: np.ndarray
+    found: bool
+    contour: np.ndarray | None = None  # [N, 1, 2] int32, full resolution
+    centre: tuple[float, float] | None = None
+    ray_points: np.ndarray | None = None  # [16, 2] salient contour points in sector order
+    small_ms: np.ndarray | None = None
+    small_sat: np.ndarray | None = None
+    small_edges: np.ndarray | None = None
+    mask: np.ndarray | None = None  # full-resolution object mask
+
+
+def _check_frame(frame: np.ndarray) -> np.ndarray:
+    if not isinstance(frame, np.ndarray):
+        raise ValueError(f"frame must be a numpy array (H x W x 3 RGB uint8), got {type(frame).__name__}")
+    if frame.dtype != np.uint8:
+        if np.issubdtype(frame.dtype, np.floating) and np.isnan(frame).any():
+            raise ValueError("frame contains NaN values; expected H x W x 3 RGB uint8 pixels")
+        raise ValueError(
+            f"frame must have dtype uint8 (0..255 RGB), got {frame.dtype}; "
+            "convert e.g. with (frame * 255).round().astype(np.uint8) for floats in [0, 1]"
+        )
+    if frame.ndim != 3 or frame.shape[2] != 3:
+        hint = " (RGBA? drop the alpha channel)" if frame.ndim == 3 and frame.shape[2] == 4 else ""
+        raise ValueError(f"frame must have shape H x W x 3 (RGB), got {frame.shape}{hint}")
+    if min(frame.shape[:2]) < MIN_SIDE:
+        raise ValueError(
+            f"frame is too small: {frame.shape[1]}x{frame.shape[0]}, need >= {MIN_SIDE} px a side"
+        )
+    return np.ascontiguousarray(frame)
+
+
+def _white_gains(image: np.ndarray) -> np.ndarray:
+    """Per-channel gains that map the image's median colour (the table) to grey of equal brightness."""
+    ref = np.median(image.reshape(-1, 3), axis=0).astype(np.float64) + 1.0
+    return np.clip(ref.mean() / ref, 0.33, 3.0)
+
+
+def _hue_distance(a: np.ndarray | float, b: float) -> np.ndarray | float:
+    d = np.abs(np.asarray(a, dtype=np.float64) - b) % 360.0
+    return np.minimum(d, 360.0 - d)
+
+
+def _mean_hue(rgb_pixels: np.ndarray) -> float:
+    mean = rgb_pixels.reshape(-1, 3).mean(axis=0).astype(np.float32).reshape(1, 1, 3)
+    return float(cv2.cvtColor(mean / 255.0, cv2.COLOR_RGB2HSV)[0, 0, 0])  # degrees for float input
+
+
+def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple[np.ndarray | None, dict]:
+    """Steps 2-4: mean shift, saturation, Canny; returns the object's mask at working resolution."""
+    h, w = small.shape[:2]
+    ms = cv2.pyrMeanShiftFiltering(
+        small, params.spatial_radius, params.colour_radius, maxLevel=params.max_level
+    )
+    gains = _white_gains(ms)
+    balanced = np.clip(ms.astype(np.float32) * gains.astype(np.float32), 0, 255).astype(np.uint8)
+    hsv = cv2.cvtColor(balanced, cv2.COLOR_RGB2HSV_FULL)  # hue 0..255 over 360 degrees
+    sat = hsv[..., 1]
+    bright = hsv[..., 2] >= params.min_value * 255
+    sat_eff = np.where(bright, sat, 0).astype(np.uint8)
+    edges = cv2.Canny(cv2.cvtColor(ms, cv2.COLOR_RGB2GRAY), params.canny_low, params.canny_high)
+    info: dict = {"ms": ms, "sat": sat_eff, "edges": edges, "gains": gains} if keep else {"gains": gains}
+
+    high = float(np.percentile(sat_eff, 99.5))
+    thr = max(params.min_saturation * 255.0, params.saturation_fraction * high)
+    mask = (sat_eff >= thr).astype(np.uint8)
+    if not mask.any():
+        return None, info
+    pieces = mask & (edges == 0)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(pieces, connectivity=4)
+    area_min = params.min_area_fraction * h * w
+    area_max = params.max_area_fraction * h * w
+    best, best_score = -1, params.min_saturation  # a penalised region must still be saturated
+    for i in range(1, n):
+        x, y, bw, bh, area = stats[i]
+        if area < area_min or area > area_max:
+            continue
+        score = float(sat_eff[labels == i].mean()) / 255.0
+        if x == 0 or y == 0 or x + bw == w or y + bh == h:
+            score *= params.border_penalty
+        if score > best_score:
+            best, best_score = i, score
+    if best < 0:
+        return None, info
+    # Grow the chosen piece back over the touching saturated pixels of the same hue (step 4).
+    seed = labels == best
+    seed_hue = _mean_hue(balanced[seed])
+    hue_deg = hsv[..., 0].astype(np.float32) * (360.0 / 256.0)
+    similar = mask.astype(bool) & (_hue_distance(hue_deg, seed_hue) <= params.hue_tolerance)
+    _, grown_labels = cv2.connectedComponents(similar.astype(np.uint8), connectivity=8)
+    seed_labels = np.unique(grown_labels[seed & similar])
+    seed_labels = seed_labels[seed_labels > 0]
+    obj = np.isin(grown_labels, seed_labels) | seed
+    obj = cv2.morphologyEx(obj.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    return obj, info
+
+
+def _start_sector(distances: np.ndarray, tolerance: float = 0.08) -> int:
+    """The sector to start from: the largest distance. Symmetric shapes have several (nearly) equal
+    largest distances, e.g. the 4 corners of a rectangle; among those within ``tolerance``
+    (relative) of the maximum, take the one whose clockwise successors are largest (weights
+    1/2, 1/4, ...), so mirror-image corners are told apart the same way in every frame."""
+    candidates = np.flatnonzero(distances >= distances.max() * (1.0 - tolerance))
+    if candidates.size == 1:
+        return int(candidates[0])
+    weights = 0.5 ** np.arange(1, SECTORS)
+    ahead = [float(weights @ np.roll(distances, -c)[1:]) for c in candidates]
+    return int(candidates[int(np.argmax(ahead))])
+
+
+def _salient_distances(
+    contour: np.ndarray, cx: float, cy: float, area: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 6: the largest distance per 22.5-degree sector, largest first, clockwise."""
+    pts = contour.reshape(-1, 2).astype(np.float64)
+    dx, dy = pts[:, 0] - cx, pts[:, 1] - cy
+    dist = np.hypot(dx, dy)
+    # atan2 with y pointing down grows clockwise on screen.
+    sector = (np.floor((np.arctan2(dy, dx) % (2 * np.pi)) / (2 * np.pi / SECTORS)).astype(int)) % SECTORS
+    best = np.full(SECTORS, -1.0)
+    idx = np.full(SECTORS, -1)
+    order = np.lexsort((dist, sector))  # per sector, the last index holds the largest distance
+    last = np.r_[sector[order][1:] != sector[order][:-1], True]
+    best[sector[order][last]] = dist[order][last]
+    idx[sector[order][last]] = order[last]
+    points = np.where(idx[:, None] >= 0, pts[np.maximum(idx, 0)], [cx, cy])
+    # Squash d / sqrt(A) (about 0.56 for a disc, > 1 for long shapes) into [0, 1).
+    distances = 1.0 - np.exp(-np.maximum(best, 0.0) / np.sqrt(area))
+    start = _start_sector(distances)
+    return np.roll(distances, -start), np.roll(points, -start, axis=0)
+
+
+def _analyse(frame: np.ndarray, params: VisionParams, keep: bool = False) -> _Result:
+    frame = _check_frame(frame)
+    height, width = frame.shape[:2]
+    work_w = min(params.work_width, width)
+    work_h = max(MIN_SIDE // 2, round(height * work_w / width))
+    small = cv2.resize(frame, (work_w, work_h), interpolation=cv2.INTER_AREA) if work_w != width else frame
+    small_mask, info = _select_object(small, params, keep)
+    result = _Result(
+        np.zeros(FEATURES, np.float32),
+        False,
+        small_ms=info.get("ms"),
+        small_sat=info.get("sat"),
+        small_edges=info.get("edges"),
+    )
+    if small_mask is None:
+        return result
+    # Step 5: the mask at full resolution (smoothly upsampled), then its largest external contour.
+    up = cv2.resize(small_mask.astype(np.float32), (width, height), interpolation=cv2.INTER_LINEAR)
+    full_mask = (up >= 0.5).astype(np.uint8)
+    contours, _ = cv2.findContours(full_mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return result
+    contour = max(contours, key=cv2.contourArea)
+    m = cv2.moments(contour)
+    if m["m00"] <= 1.0:
+        return result
+    area = m["m00"]
+    cx, cy = m["m10"] / area, m["m01"] / area  # centre of mass
+    distances, ray_points = _salient_distances(contour, cx, cy, area)
+    filled = np.zeros((height, width), np.uint8)
+    cv2.drawContours(filled, [contour], -1, 255, thickness=cv2.FILLED)
+    rgb = np.array(cv2.mean(frame, mask=filled)[:3]) / 255.0  # step 7, mean R, G, B inside the contour
+    if params.white_balance == "grey_world":
+        rgb = rgb * info["gains"]
+    features = np.concatenate([distances, np.clip(rgb, 0.0, 1.0), [cx / width, cy / height]])
+    result.features = np.clip(features, 0.0, 1.0).astype(np.float32)
+    result.found = True
+    result.contour, result.centre, result.ray_points, result.mask = contour, (cx, cy), ray_points, filled
+    return result
+
+
+def extract_features(frame_rgb: np.ndarray, params: VisionParams | None = None) -> np.ndarray:
+    """One RGB uint8 frame -> ``[21]`` float32: 16 distances, mean R, G, B, centroid x, y (all zeros if
+    no object is found)."""
+    return _analyse(frame_rgb, params or VisionParams()).features
+
+
+def pipeline_steps(frame_rgb: np.ndarray, params: VisionParams | None = None) -> VisionSteps:
+    """The same pipeline as :func:`extract_features`, keeping every intermediate image."""
+    params = params or VisionParams()
+    res = _analyse(frame_rgb, params, keep=True)
+    frame = np.ascontiguousarray(frame_rgb)
+    size = (frame.shape[1], frame.shape[0])
+
+    def up(img: np.ndarray) -> np.ndarray:
+        return cv2.resize(img, size, interpolation=cv2.INTER_NEAREST)
+
+    contour_img = frame.copy()
+    rays_img = frame.copy()
+    thick = max(1, round(frame.shape[1] / 320))
+    if res.found and res.contour is not None and res.centre is not None and res.ray_points is not None:
+        cv2.drawContours(contour_img, [res.contour], -1, (0, 255, 0), thick)
+        cv2.drawContours(rays_img, [res.contour], -1, (0, 255, 0), thick)
+        centre = (round(res.centre[0]), round(res.centre[1]))
+        for k, (x, y) in enumerate(res.ray_points):
+            colour = (255, 0, 255) if k == 0 else (255, 255, 255)
+            cv2.line(rays_img, centre, (round(x), round(y)), colour, thick, cv2.LINE_AA)
+        cv2.circle(rays_img, centre, 2 * thick + 1, (255, 0, 0), cv2.FILLED)
+    mask = res.mask if res.mask is not None else np.zeros(frame.shape[:2], np.uint8)
+    return VisionSteps(
+        original=frame.copy(),
+        mean_shift=up(res.small_ms),
+        saturation=up(res.small_sat),
+        edges=up(res.small_edges),
+        object_mask=mask,
+        contour=contour_img,
+        rays=rays_img,
+        features=res.features,
+        found=res.found,
+    )
+
+
+def encode_frames_found(
+    frames: np.ndarray, workers: int = 2, params: VisionParams | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Encode a recording ``[T, H, W, 3]`` -> (``[T, 21]`` float32, ``[T]`` bool: object found).
+
+    Frames without an object take the features of the nearest earlier frame with one (the nearest
+    later one before the first detection); a recording without any object stays all zeros.
+    ``workers`` threads share the frames (OpenCV releases the GIL)."""
+    params = params or VisionParams()
+    arr = frames if isinstance(frames, np.ndarray) else np.asarray(frames)
+    if arr.ndim != 4 or arr.shape[-1] != 3:
+        raise ValueError(f"frames must have shape T x H x W x 3 (RGB), got {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ValueError("frames is empty (0 time steps)")
+    _check_frame(arr[0])  # dtype and size, with a clear message, before starting workers
+
+    def one(t: int) -> _Result:
+        return _analyse(arr[t], params)
+
+    if workers <= 1 or arr.shape[0] == 1:
+        results = [one(t) for t in range(arr.shape[0])]
+    else:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            results = list(pool.map(one, range(arr.shape[0])))
+    features = np.stack([r.features for r in results])
+    found = np.array([r.found for r in results])
+    if found.any() and not found.all():
+        hits = np.flatnonzero(found)
+        prev = np.searchsorted(hits, np.arange(len(found)), side="right") - 1
+        source = hits[np.maximum(prev, 0)]  # nearest earlier detection, or the first one
+        features = features[source]
+        logger.debug("no object in %d of %d frames; filled from neighbours", (~found).sum(), len(found))
+    return features, found
+
+
+def encode_frames(frames: np.ndarray, workers: int = 2, params: VisionParams | None = None) -> np.ndarray:
+    """Encode a recording ``[T, H, W, 3]`` RGB uint8 -> ``[T, 21]`` float32 (see module docstring)."""
+    return encode_frames_found(frames, workers, params)[0]

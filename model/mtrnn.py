@@ -1,0 +1,175 @@
+"""The multiple timescale recurrent neural network (paper 3.1-3.2, eqs. 2-5 and 11-12).
+
+One MTRNN has three horizontal layers, IO, context-fast (Cf) and context-slow (Cs), each with its
+own timescale tau. The first |Csc| units of Cs are the context-controlling units. Connectivity is
+adjacent only: IO<->Cf, Cf<->Cs and recurrence within each layer; IO and Cs never connect.
+
+The same network is used two ways:
+- with *context bias* (MTRNN_a): the Csc internal state at t = 0 is a context c_0 from which the
+  network generates a sequence closed-loop (`generate`);
+- with *context abstraction* (MTRNN_s, MTRNN_v): the network reads a sequence and its Csc internal
+  state at the final step T is the abstracted context c_T (`abstract`).
+
+Implementation: one masked dense weight matrix for all blocks, and for the encoders the input
+projection computed for all time steps at once (the "fused" form).
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor, nn
+
+from model.config import KAPPA_H, KAPPA_W, MTRNNConfig
+
+
+def scaled_logistic(z: Tensor) -> Tensor:
+    """The paper's sigmoid (3.4.3): a logistic of slope kappa_w stretched to (-kappa_h, 1 + kappa_h).
+
+    Our reading of "kappa_h = 0.35795 for range, kappa_w = 0.92 for slope":
+    f(z) = (1 + 2 kappa_h) / (1 + exp(-kappa_w z)) - kappa_h. The stretch 1 + 2 kappa_h = 1.7159 is
+    LeCun's constant, so targets 0 and 1 sit on the steep part of f, as LeCun et al. (1998) advise.
+    """
+    return (1.0 + 2.0 * KAPPA_H) * torch.sigmoid(KAPPA_W * z) - KAPPA_H
+
+
+def scaled_logistic_inverse(y: Tensor) -> Tensor:
+    """z such that scaled_logistic(z) = y, for y in (-kappa_h, 1 + kappa_h)."""
+    p = (y + KAPPA_H) / (1.0 + 2.0 * KAPPA_H)
+    return torch.logit(p) / KAPPA_W
+
+
+def connectivity_mask(cfg: MTRNNConfig) -> Tensor:
+    """mask[i, j] = 1 where unit j projects to unit i: adjacent layers and within-layer recurrence."""
+    layer = torch.cat([torch.full((n,), k) for k, n in enumerate((cfg.io, cfg.cf, cfg.cs))])
+    return ((layer[:, None] - layer[None, :]).abs() <= 1).float()
+
+
+class MTRNN(nn.Module):
+    """One MTRNN layer stack: IO, Cf, Cs with per-layer timescales (eqs. 2-5)."""
+
+    def __init__(self, cfg: MTRNNConfig, generator: torch.Generator | None = None) -> None:
+        super().__init__()
+        self.cfg = cfg
+        n = cfg.size
+
+        def uniform(*shape: int) -> Tensor:
+            return (torch.rand(*shape, generator=generator) * 2 - 1) * cfg.weight_init
+
+        self.weight = nn.Parameter(uniform(n, n))  # w_ij: from unit j to unit i
+        self.bias = nn.Parameter(uniform(n))  # b_i
+        self.register_buffer("mask", connectivity_mask(cfg))
+        tau = torch.cat(
+            [
+                torch.full((cfg.io,), float(cfg.tau_io)),
+                torch.full((cfg.cf,), float(cfg.tau_cf)),
+                torch.full((cfg.cs,), float(cfg.tau_cs)),
+            ]
+        )
+        self.register_buffer("tau", tau)
+
+    @property
+    def csc_slice(self) -> slice:
+        """The Csc units: the first |Csc| units of the Cs layer."""
+        start = self.cfg.io + self.cfg.cf
+        return slice(start, start + self.cfg.csc)
+
+    @property
+    def csc_bias(self) -> Tensor:
+        return self.bias[self.csc_slice]
+
+    def masked_weight(self) -> Tensor:
+        return self.weight * self.mask
+
+    def activation(self, z: Tensor) -> Tensor:
+        """eq. (4): softmax on MTRNN_a's IO (eq. 21), the scaled logistic everywhere else."""
+        io = self.cfg.io
+        if self.cfg.io_activation == "softmax":
+            return torch.cat([torch.softmax(z[..., :io], dim=-1), scaled_logistic(z[..., io:])], dim=-1)
+        return scaled_logistic(z)
+
+    def _leak(self, z: Tensor, drive: Tensor) -> Tensor:
+        """eq. (3): z_t = (1 - 1/tau) z_{t-1} + (1/tau) (sum_j w_ij x_t,j + b_i)."""
+        return (1.0 - 1.0 / self.tau) * z + drive / self.tau
+
+    def initial_state(self, batch: int, c0: Tensor | None = None) -> Tensor:
+        """z_0: the Csc units hold c_0 (eq. 3, t = 0), every other unit starts at 0."""
+        z = torch.zeros(batch, self.cfg.size, dtype=self.weight.dtype, device=self.weight.device)
+        if c0 is not None:
+            z = z.clone()
+            z[:, self.csc_slice] = c0
+        return z
+
+    def abstract(self, inputs: Tensor, lengths: Tensor | None = None, return_states: bool = False):
+        """Context abstraction (3.2): read `inputs` [B, T, io] and return c_T, the Csc internal
+        states at each sequence's final step [B, csc] (with all internal states [B, T, N] if asked).
+
+        eq. (2): IO units take the sensory input x*_t; every other unit takes y_{t-1}.
+        """
+        batch, steps, _ = inputs.shape
+        io = self.cfg.io
+        w = self.masked_weight()
+        drive_in = inputs @ w[:, :io].T + self.bias  # input projection for all steps at once
+        w_rec = w[:, io:].T
+        z = self.initial_state(batch)
+        y = self.activation(z)
+        states = []
+        for t in range(steps):
+            z = self._leak(z, drive_in[:, t] + y[:, io:] @ w_rec)
+            y = self.activation(z)
+            states.append(z)
+        trajectory = torch.stack(states, dim=1)
+        last = (lengths - 1) if lengths is not None else torch.full((batch,), steps - 1)
+        c_t = trajectory[torch.arange(batch), last.long(), self.csc_slice]
+        return (c_t, trajectory) if return_states else c_t
+
+    def generate(
+        self,
+        c0: Tensor,
+        steps: int,
+        teacher: Tensor | None = None,
+        alpha: float = 0.0,
+        return_states: bool = False,
+    ):
+        """Context bias (3.1.1): from c_0 [B, csc] produce IO activity y_0..y_{steps-1} [B, steps, io].
+
+        eq. (5): the IO input is (alpha) y*_{t-1} + (1 - alpha) y_{t-1}; with alpha = 0 (or no
+        teacher) the generation is closed-loop.
+        """
+        io = self.cfg.io
+        w = self.masked_weight().T
+        z = self.initial_state(c0.shape[0], c0)
+        y = self.activation(z)
+        outputs, states = [y[:, :io]], [z]
+        for t in range(1, steps):
+            x_io = y[:, :io]
+            if teacher is not None and alpha > 0.0:
+                x_io = alpha * teacher[:, t - 1] + (1.0 - alpha) * x_io
+            x = torch.cat([x_io, y[:, io:]], dim=-1)
+            z = self._leak(z, x @ w + self.bias)
+            y = self.activation(z)
+            outputs.append(y[:, :io])
+            states.append(z)
+        activity = torch.stack(outputs, dim=1)
+        return (activity, torch.stack(states, dim=1)) if return_states else activity
+
+
+def kl_divergence(target: Tensor, output: Tensor, eps: float = 1e-8) -> Tensor:
+    """KLD between desired and produced softmax activity (3.1.3), summed over units and steps t >= 1,
+    averaged over sequences. Step 0 is the fixed initial state and carries no error."""
+    t, o = target[:, 1:], output[:, 1:]
+    return (t * (torch.log(t + eps) - torch.log(o + eps))).sum(dim=(1, 2)).mean()
+
+
+def context_abstraction_loss(net: MTRNN, c_t_produced: Tensor, c_t_target: Tensor, psi: float) -> Tensor:
+    """LMS on the final Csc states with self-organisation forcing (eqs. 11-12).
+
+    eq. (11): the weights learn from (1 - psi) of the error between y_T = f(z_T) and f(c_T + b).
+    eq. (12): the targets c_T move along the same error. We let c_T descend the error (towards the
+    network's activity); the paper's psi * zeta step size is applied by the optimiser, which gives c_T
+    a learning rate scaled by psi (under a sign-based optimiser a gradient scale would do nothing).
+    """
+    bias = net.csc_bias.detach()
+    produced = scaled_logistic(c_t_produced)
+    weights_part = 0.5 * ((produced - scaled_logistic(c_t_target.detach() + bias)) ** 2).sum(dim=1).mean()
+    targets_part = 0.5 * ((produced.detach() - scaled_logistic(c_t_target + bias)) ** 2).sum(dim=1).mean()
+    return (1.0 - psi) * weights_part + targets_part

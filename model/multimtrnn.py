@@ -1,0 +1,257 @@
+"""The multi-modal MTRNN of the paper (3.4, Fig. 4, eqs. 16-17).
+
+MTRNN_s (proprioception) and MTRNN_v (vision) abstract their input sequences into final Csc
+states c_s,T and c_v,T (context abstraction); the cell assemblies (CAs) map them to an initial
+Csc state c_a,0 of MTRNN_a, which generates the utterance closed-loop (context bias):
+
+    perception -> (c_s,T, c_v,T) -> assemblies -> c_a,0 -> MTRNN_a -> activity -> phonemes -> text
+
+The assemblies are any `nn.Module` with `forward(c_s, c_v) -> c_a0` registered by a kind name
+(`register_assemblies`), so a checkpoint can rebuild them; `CellAssemblies` is the paper's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+from model.config import MultiMTRNNConfig
+from model.encoding.utterance import Lexicon, decode_text
+from model.mtrnn import MTRNN, scaled_logistic
+
+ASSEMBLIES: dict[str, type[nn.Module]] = {}
+
+
+def register_assemblies(kind: str) -> Callable[[type[nn.Module]], type[nn.Module]]:
+    """Class decorator: make an assemblies module rebuildable from its `kind` name.
+
+    The class must take keyword arguments that are JSON values, expose them as `init_kwargs()`
+    and set `kind`; `forward(c_s [B, csc_s], c_v [B, csc_v]) -> c_a0 [B, csc_a]`.
+    """
+
+    def decorate(cls: type[nn.Module]) -> type[nn.Module]:
+        if kind in ASSEMBLIES and ASSEMBLIES[kind] is not cls:
+            raise ValueError(f"assemblies kind {kind!r} is already registered to {ASSEMBLIES[kind]}")
+        cls.kind = kind
+        ASSEMBLIES[kind] = cls
+        return cls
+
+    return decorate
+
+
+@register_assemblies("linear")
+class CellAssemblies(nn.Module):
+    """The paper's CAs (eqs. 16-17): one linear layer from f(c_s,T), f(c_v,T) to z.
+
+    eq. (17): z_i = sum_j w_ij f(c_s,T,j) + sum_k w_ik f(c_v,T,k) + b_i for i in I_a,Csc.
+    eq. (16): trained by LMS between y = f(z) and f(c_a,0) (see `model.training.fit_assemblies`).
+    The CAs' internal state z is the c_a,0 that starts MTRNN_a's generation.
+    """
+
+    kind = "linear"
+
+    def __init__(self, csc_s: int, csc_v: int, csc_a: int, weight_init: float = 0.025, seed: int = 0) -> None:
+        super().__init__()
+        self._kwargs = {"csc_s": csc_s, "csc_v": csc_v, "csc_a": csc_a, "weight_init": weight_init, "seed": seed}
+        g = torch.Generator().manual_seed(seed)
+        self.weight = nn.Parameter((torch.rand(csc_a, csc_s + csc_v, generator=g) * 2 - 1) * weight_init)
+        self.bias = nn.Parameter((torch.rand(csc_a, generator=g) * 2 - 1) * weight_init)
+
+    def init_kwargs(self) -> dict:
+        return dict(self._kwargs)
+
+    def forward(self, c_s: Tensor, c_v: Tensor) -> Tensor:
+        x = torch.cat([scaled_logistic(c_s), scaled_logistic(c_v)], dim=-1)
+        return x @ self.weight.T + self.bias  # eq. (17)
+
+
+@dataclass
+class Description:
+    """What the model says about one scene, and the Csc states on the way."""
+
+    text: str
+    words: list[str]
+    phonemes: list[str]
+    activity: np.ndarray  # [T_a, |B|] softmax IO activity of MTRNN_a
+    csc_s: np.ndarray | None  # [csc_s] c_s,T (None when generated from a given c_a,0)
+    csc_v: np.ndarray | None  # [csc_v] c_v,T
+    csc_a: np.ndarray  # [csc_a] c_a,0
+
+
+@dataclass
+class NetTrace:
+    """One MTRNN's activity over time: activations y per layer and the Csc internal states z."""
+
+    io: np.ndarray  # [T, |IO|]
+    cf: np.ndarray  # [T, |Cf|]
+    cs: np.ndarray  # [T, |Cs|]
+    csc: np.ndarray  # [T, |Csc|] internal states z of the Csc units
+
+
+@dataclass
+class ActivityTrace:
+    """All three nets' activity for one scene (teaching pages): perception in, utterance out."""
+
+    somatosensory: NetTrace
+    visual: NetTrace
+    auditory: NetTrace
+    description: Description
+
+
+def _net_trace(net: MTRNN, states: Tensor) -> NetTrace:
+    """states: internal states z [T, N] of one sequence."""
+    c = net.cfg
+    y = net.activation(states).detach().numpy()
+    z = states.detach().numpy()
+    return NetTrace(
+        io=y[:, : c.io],
+        cf=y[:, c.io : c.io + c.cf],
+        cs=y[:, c.io + c.cf :],
+        csc=z[:, net.csc_slice],
+    )
+
+
+def pad_sequences(sequences: Sequence[np.ndarray | Tensor], columns: int | None = None) -> tuple[Tensor, Tensor]:
+    """Variable-length [T_i, F] arrays -> zero-padded float32 [B, T_max, F] and lengths [B].
+
+    `columns` keeps the first columns only (e.g. the 19 paper features of 21-column vision)."""
+    if len(sequences) == 0:
+        raise ValueError("need at least one sequence")
+    arrays = [torch.as_tensor(np.asarray(s), dtype=torch.float32) for s in sequences]
+    for a in arrays:
+        if a.ndim != 2 or a.shape[0] == 0:
+            raise ValueError(f"each sequence must be a non-empty [T, F] array, got shape {tuple(a.shape)}")
+    width = arrays[0].shape[1] if columns is None else columns
+    for a in arrays:
+        if a.shape[1] < width:
+            raise ValueError(f"sequence has {a.shape[1]} features, the network reads {width}")
+    lengths = torch.tensor([a.shape[0] for a in arrays])
+    out = torch.zeros(len(arrays), int(lengths.max()), width)
+    for i, a in enumerate(arrays):
+        out[i, : a.shape[0]] = a[:, :width]
+    return out, lengths
+
+
+class MultiMTRNN(nn.Module):
+    """MTRNN_s + MTRNN_v -> cell assemblies -> MTRNN_a (Fig. 4)."""
+
+    def __init__(
+        self,
+        config: MultiMTRNNConfig | None = None,
+        assemblies: nn.Module | None = None,
+        seed: int = 0,
+    ) -> None:
+        super().__init__()
+        self.config = config if config is not None else MultiMTRNNConfig()
+        g = torch.Generator().manual_seed(seed)
+        self.auditory = MTRNN(self.config.auditory, g)
+        self.somatosensory = MTRNN(self.config.somatosensory, g)
+        self.visual = MTRNN(self.config.visual, g)
+        if assemblies is None:
+            assemblies = CellAssemblies(
+                self.config.somatosensory.csc,
+                self.config.visual.csc,
+                self.config.auditory.csc,
+                self.config.auditory.weight_init,
+                seed=seed,
+            )
+        self.assemblies = assemblies
+
+    @property
+    def assemblies_kind(self) -> str:
+        return type(self.assemblies).kind
+
+    def assemblies_spec(self) -> dict:
+        """{"kind", "kwargs"}: enough to rebuild the assemblies module (see `model.checkpoint`)."""
+        return {"kind": self.assemblies_kind, "kwargs": self.assemblies.init_kwargs()}
+
+    # --- perception -> Csc ----------------------------------------------------------------------
+
+    def abstract(
+        self,
+        proprioception: Sequence[np.ndarray] | Tensor,
+        vision: Sequence[np.ndarray] | Tensor,
+        proprioception_lengths: Tensor | None = None,
+        vision_lengths: Tensor | None = None,
+    ) -> tuple[Tensor, Tensor]:
+        """(c_s,T, c_v,T) [B, csc] from lists of [T_i, F] arrays, or padded [B, T, F] tensors with
+        lengths. Vision keeps its first `config.visual.io` columns (19 paper features)."""
+        p, p_len = self._batch(proprioception, proprioception_lengths, self.config.somatosensory.io)
+        v, v_len = self._batch(vision, vision_lengths, self.config.visual.io)
+        return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
+
+    @staticmethod
+    def _batch(x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: int) -> tuple[Tensor, Tensor]:
+        if isinstance(x, Tensor) and x.ndim == 3:
+            if lengths is None:
+                lengths = torch.full((x.shape[0],), x.shape[1])
+            return x[..., :columns], lengths
+        return pad_sequences(x, columns)
+
+    def forward(
+        self,
+        proprioception: Sequence[np.ndarray] | Tensor,
+        vision: Sequence[np.ndarray] | Tensor,
+        proprioception_lengths: Tensor | None = None,
+        vision_lengths: Tensor | None = None,
+    ) -> Tensor:
+        """Perception -> c_a,0 [B, csc_a]."""
+        c_s, c_v = self.abstract(proprioception, vision, proprioception_lengths, vision_lengths)
+        return self.assemblies(c_s, c_v)
+
+    # --- Csc -> utterance -----------------------------------------------------------------------
+
+    def generate(self, c_a0: Tensor, steps: int | None = None) -> Tensor:
+        """Closed-loop MTRNN_a activity [B, T_a, |B|] from c_a,0 [B, csc_a] (alpha = 0)."""
+        return self.auditory.generate(c_a0, steps or self.config.generation_steps)
+
+    def _description(
+        self, activity: np.ndarray, lexicon: Lexicon, c_a: np.ndarray, c_s: np.ndarray | None, c_v: np.ndarray | None
+    ) -> Description:
+        phonemes, words, text = decode_text(activity, lexicon)
+        return Description(text, words, phonemes, activity, c_s, c_v, c_a)
+
+    @torch.no_grad()
+    def describe_batch(
+        self, proprioception: Sequence[np.ndarray], vision: Sequence[np.ndarray], lexicon: Lexicon
+    ) -> list[Description]:
+        """One `Description` per scene (lists of [T_i, 5] and [T_i, F] arrays)."""
+        c_s, c_v = self.abstract(proprioception, vision)
+        c_a = self.assemblies(c_s, c_v)
+        activity = self.generate(c_a).numpy()
+        c_s, c_v, c_a = c_s.numpy(), c_v.numpy(), c_a.numpy()
+        return [self._description(activity[i], lexicon, c_a[i], c_s[i], c_v[i]) for i in range(len(activity))]
+
+    def describe(self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon) -> Description:
+        """Proprioception [T, 5] and vision [T, F] of one scene -> what the model says."""
+        return self.describe_batch([proprioception], [vision], lexicon)[0]
+
+    @torch.no_grad()
+    def generate_from_csc(self, c_a0: np.ndarray | Sequence[float], lexicon: Lexicon) -> Description:
+        """Speak from any point of the auditory Csc space (the latent explorer)."""
+        c = torch.as_tensor(np.asarray(c_a0), dtype=torch.float32).reshape(1, -1)
+        if c.shape[1] != self.config.auditory.csc:
+            raise ValueError(f"c_a,0 must have {self.config.auditory.csc} values, got {c.shape[1]}")
+        activity = self.generate(c)[0].numpy()
+        return self._description(activity, lexicon, c[0].numpy(), None, None)
+
+    @torch.no_grad()
+    def activity_trace(self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon) -> ActivityTrace:
+        """Every layer's activity over time in all three nets for one scene."""
+        p, p_len = pad_sequences([proprioception], self.config.somatosensory.io)
+        v, v_len = pad_sequences([vision], self.config.visual.io)
+        c_s, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
+        c_v, v_states = self.visual.abstract(v, v_len, return_states=True)
+        c_a = self.assemblies(c_s, c_v)
+        activity, a_states = self.auditory.generate(c_a, self.config.generation_steps, return_states=True)
+        description = self._description(activity[0].numpy(), lexicon, c_a[0].numpy(), c_s[0].numpy(), c_v[0].numpy())
+        return ActivityTrace(
+            somatosensory=_net_trace(self.somatosensory, s_states[0]),
+            visual=_net_trace(self.visual, v_states[0]),
+            auditory=_net_trace(self.auditory, a_states[0]),
+            description=description,
+        )

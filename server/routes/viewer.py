@@ -1,0 +1,167 @@
+"""The 3D viewer: its shared time cursor (GET/POST /api/viewer, WS /api/viewer/ws) and viser's client,
+served on the app's origin (GET /viser/) with its WebSocket proxied (WS /viser)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from pathlib import Path
+
+import viser
+import websockets
+from fastapi import APIRouter, Depends, HTTPException, Request, WebSocket, WebSocketDisconnect
+from fastapi.responses import FileResponse
+from starlette.concurrency import run_in_threadpool
+
+from data.scenario import scene_from_utterance
+from server.schemas import Problem, ViewerCommand, ViewerState
+from server.state import AppState, get_state
+from server.viewer import SceneViewer
+
+router = APIRouter(tags=["viewer"])
+
+VISER_CLIENT = Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
+
+
+def _viewer(state: AppState) -> SceneViewer:
+    if state.viewer is None:
+        raise HTTPException(503, "the 3D viewer is not running (started with MTRNN_VISER=0)")
+    return state.viewer
+
+
+def _state(state: AppState) -> ViewerState:
+    if state.viewer is None:
+        return ViewerState(available=False, source=None, t=0.0, duration_s=0.0, playing=False, speed=1.0)
+    return ViewerState(available=True, **state.viewer.state())
+
+
+def show(state: AppState, source: str) -> None:
+    """Load a corpus recording or an upload into the 3D view."""
+    viewer = _viewer(state)
+    if source.startswith("upload-"):
+        up = state.upload(source)
+        colour = shape = None
+        if up.result.expected:
+            with contextlib.suppress(ValueError):
+                scene = scene_from_utterance(up.result.expected)
+                colour, shape = scene.colour, scene.shape
+        viewer.show(source, up.recording.joints, float(getattr(up.recording, "fps", 20.0) or 20.0), colour, shape)
+    else:
+        entry = state.entry(source)
+        viewer.show(source, entry.joints, 20.0, entry.scene.colour, entry.scene.shape)
+
+
+@router.get("/api/viewer", response_model=ViewerState)
+def get_viewer(state: AppState = Depends(get_state)) -> ViewerState:
+    """Where the shared time cursor is."""
+    return _state(state)
+
+
+@router.post("/api/viewer", response_model=ViewerState, responses={404: {"model": Problem}, 503: {"model": Problem}})
+async def command_viewer(cmd: ViewerCommand, state: AppState = Depends(get_state)) -> ViewerState:
+    """Show a recording, move the cursor, play, pause or change the speed."""
+    viewer = _viewer(state)
+    if cmd.show is not None and cmd.show != viewer.cursor.source:
+        await run_in_threadpool(show, state, cmd.show)
+    if cmd.speed is not None:
+        viewer.set_speed(cmd.speed)
+    if cmd.t is not None:
+        viewer.seek(cmd.t)
+    if cmd.playing is True:
+        viewer.play()
+    elif cmd.playing is False:
+        viewer.pause()
+    return _state(state)
+
+
+@router.websocket("/api/viewer/ws")
+async def viewer_socket(ws: WebSocket) -> None:
+    """Pushes the cursor on every change; accepts the same commands as POST /api/viewer."""
+    state: AppState = ws.app.state.mtrnn
+    await ws.accept()
+    if state.viewer is None:
+        await ws.send_json(_state(state).model_dump())
+        await ws.close()
+        return
+    loop = asyncio.get_running_loop()
+    queue: asyncio.Queue[dict] = asyncio.Queue(maxsize=64)
+
+    def push(cursor: dict) -> None:
+        loop.call_soon_threadsafe(lambda: queue.full() or queue.put_nowait(cursor))
+
+    unsubscribe = state.viewer.subscribe(push)
+
+    async def sender() -> None:
+        await ws.send_json(_state(state).model_dump())
+        while True:
+            cursor = await queue.get()
+            while not queue.empty():  # only the newest matters
+                cursor = queue.get_nowait()
+            await ws.send_json({"available": True, **cursor})
+
+    task = asyncio.create_task(sender())
+    try:
+        while True:
+            cmd = ViewerCommand(**json.loads(await ws.receive_text()))
+            await command_viewer(cmd, state)
+    except (WebSocketDisconnect, ValueError, HTTPException):
+        pass
+    finally:
+        unsubscribe()
+        task.cancel()
+
+
+@router.get("/viser/", include_in_schema=False)
+def viser_client(request: Request) -> FileResponse:
+    """viser's web client (one file); it connects back to ws://<this origin>/viser."""
+    _viewer(request.app.state.mtrnn)
+    return FileResponse(VISER_CLIENT, media_type="text/html")
+
+
+@router.websocket("/viser")
+async def viser_proxy(ws: WebSocket) -> None:
+    """Relay the viser client's WebSocket to the viser server on 127.0.0.1, keeping its subprotocol."""
+    state: AppState = ws.app.state.mtrnn
+    if state.viewer is None:
+        await ws.close(code=1011)
+        return
+    offered = ws.scope.get("subprotocols") or []
+    try:
+        upstream = await websockets.connect(
+            f"ws://127.0.0.1:{state.viewer.port}",
+            subprotocols=offered or None,  # e.g. "viser-v1.1.1": viser checks the client's version
+            max_size=None,
+            compression=None,
+        )
+    except OSError:
+        await ws.close(code=1011)
+        return
+    await ws.accept(subprotocol=upstream.subprotocol)
+
+    async def down() -> None:
+        async for message in upstream:
+            if isinstance(message, bytes):
+                await ws.send_bytes(message)
+            else:
+                await ws.send_text(message)
+
+    async def up() -> None:
+        while True:
+            message = await ws.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            if message.get("bytes") is not None:
+                await upstream.send(message["bytes"])
+            elif message.get("text") is not None:
+                await upstream.send(message["text"])
+
+    tasks = [asyncio.create_task(down()), asyncio.create_task(up())]
+    try:
+        await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for task in tasks:
+            task.cancel()
+        await upstream.close()
+        with contextlib.suppress(RuntimeError):
+            await ws.close()
