@@ -2,7 +2,7 @@
 
 Workspace (torso frame, metres; x forward, y left, z up; see `data/nao.py`): the robot sits at a
 table whose top is `TABLE_Z` = -0.07, i.e. 0.17 m below the right shoulder (0, -0.098, 0.100).
-Objects stand on the table in front of the right arm around `OBJECT_HOME` = (0.102, -0.10); a
+Objects stand on the table in front of the right arm around `OBJECT_HOME` = (0.114, -0.10); a
 teacher places them within a few centimetres of it. The NAO's hand reaches between ~0.155 m
 (elbow fully bent) and 0.219 m (arm straight) from the shoulder, which at table height is a band
 from ~0.05 m to ~0.16 m in front of the shoulder. The guided hand path is kept inside this shell
@@ -12,8 +12,8 @@ The teaching instructions (Fig. 5b) become hand paths relative to the object:
 
     pull     hand over the object to its far side, down, drag it towards the torso (-x)
     push     hand down on the object's near side, push it away from the torso (+x)
-    show me  hand moves above and to the right of the object and stops there, pointing; the
-             object stays
+    show me  hand moves next to the object (its right side, a little above it) and stops there,
+             pointing at it with a small dip; the object stays
     slide    hand down on the object's right (-y) side, slide it horizontally to the left (+y)
 
 All objects have a similar mass and friction, so the path depends on the object only through
@@ -31,7 +31,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from data.nao import JOINT_LIMITS, SHOULDER_OFFSET_Y, SHOULDER_OFFSET_Z, forward_kinematics, inverse_kinematics
+from data.nao import (
+    JOINT_LIMITS,
+    SHOULDER_OFFSET_Y,
+    SHOULDER_OFFSET_Z,
+    forward_kinematics,
+    inverse_kinematics,
+)
 from data.scenario import Scene
 
 FPS = 20
@@ -39,20 +45,21 @@ MIN_DURATION_S = 3.0
 MAX_DURATION_S = 6.0
 
 TABLE_Z = -0.07  # table top, torso frame (0.17 m below the shoulder)
-OBJECT_HOME = np.array([0.102, -0.10])  # nominal object position on the table (x, y)
+OBJECT_HOME = np.array([0.114, -0.10])  # nominal object position on the table (x, y)
 HAND_RADIUS = 0.013  # half thickness of the NAO hand: hand centre to object surface at contact
+FINGER_REACH = 0.022  # pushing, the fingertips touch the object: the hand centre stays this much further
 
 # Object footprint and height, metres: (half extent along x, half extent along y, height).
 # The banana lies across the table (long along y), the phone lengthwise (long along x).
 OBJECT_SIZE: dict[str, tuple[float, float, float]] = {
     "apple": (0.024, 0.024, 0.050),
-    "banana": (0.016, 0.046, 0.030),
+    "banana": (0.013, 0.048, 0.026),
     "dice": (0.020, 0.020, 0.040),
-    "phone": (0.030, 0.018, 0.012),
+    "phone": (0.028, 0.017, 0.012),
 }
 
 # Posture every recording starts from (hand raised to the right, above the table's near edge).
-HOME_POSTURE: np.ndarray = inverse_kinematics(np.array([0.13, -0.17, 0.03]))
+HOME_POSTURE: np.ndarray = inverse_kinematics(np.array([0.15, -0.17, 0.0]))
 HOME_POSTURE.setflags(write=False)
 
 _SHOULDER = np.array([0.0, -SHOULDER_OFFSET_Y, SHOULDER_OFFSET_Z])
@@ -92,7 +99,7 @@ class Teacher:
             hesitation=float(rng.choice([0.0, rng.uniform(0.1, 0.8)])),
             tremor=float(rng.uniform(0.0003, 0.003)),
             tremor_hz=float(rng.uniform(3.0, 9.0)),
-            placement=(float(rng.uniform(-0.008, 0.008)), float(rng.uniform(-0.015, 0.015))),
+            placement=(float(rng.uniform(-0.005, 0.005)), float(rng.uniform(-0.015, 0.015))),
             wrist_yaw=float(rng.uniform(-0.35, 0.35)),
             retreat=float(rng.uniform(0.0, 1.0)),
             point_reach=float(rng.uniform(0.0, 0.025)),
@@ -101,6 +108,11 @@ class Teacher:
     def to_dict(self) -> dict[str, float | list[float]]:
         """JSON-friendly form (for corpus metadata)."""
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, values: dict) -> Teacher:
+        """Inverse of `to_dict`."""
+        return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in values.items()})
 
 
 @dataclass(frozen=True)
@@ -152,11 +164,14 @@ def _tremor(n: int, teacher: Teacher, rng: np.random.Generator) -> np.ndarray:
 
 def _keyframes(
     scene: Scene, teacher: Teacher, rng: np.random.Generator, obj: np.ndarray, home: np.ndarray
-) -> tuple[list[tuple[np.ndarray, float, float]], int, np.ndarray, float]:
-    """Hand keyframes [(point, duration s, wrist yaw)], index of the contact segment (-1: none),
-    the push direction in the table plane and the object's displacement along it."""
+) -> tuple[list[tuple[np.ndarray, float, float]], int, np.ndarray]:
+    """Hand keyframes [(point, duration s, wrist yaw)], the index of the keyframe that ends the
+    contact segment (-1: no contact) and the direction the object is moved in the table plane."""
     half_x, half_y, height = OBJECT_SIZE[scene.shape]
-    jitter = lambda scale: float(rng.normal(0.0, scale))  # noqa: E731  trial-to-trial variation
+
+    def jitter(scale: float) -> float:  # trial-to-trial variation of the teacher's habits
+        return float(rng.normal(0.0, scale))
+
     amp = teacher.amplitude * (1.0 + jitter(0.12))
     contact_z = TABLE_Z + teacher.contact_height + jitter(0.002)
     lift = teacher.approach_height + jitter(0.005)
@@ -168,12 +183,12 @@ def _keyframes(
     if scene.action == "pull":
         direction = np.array([-1.0, 0.0])
         c0 = np.array([obj[0] + half_x + HAND_RADIUS, obj[1] + jitter(0.004), contact_z])
-        over = np.array([c0[0] + 0.01, c0[1] - 0.025 * side[1], over_z])
-        pre = [over]
+        pre = [np.array([c0[0] + 0.01, c0[1] - 0.025 * side[1], over_z])]  # over the object
     elif scene.action == "push":
         direction = np.array([1.0, 0.0])
-        c0 = np.array([obj[0] - half_x - HAND_RADIUS, obj[1] + jitter(0.004), contact_z])
-        pre = [np.array([c0[0] - 0.004, c0[1] - 0.03 - 0.015 * side[1], contact_z + 0.3 * lift])]
+        low = min(contact_z, TABLE_Z + 0.014)  # close to the torso the arm only reaches low down
+        c0 = np.array([obj[0] - half_x - HAND_RADIUS - FINGER_REACH, obj[1] + jitter(0.004), low])
+        pre = [np.array([c0[0] + 0.015, c0[1] - 0.035 - 0.015 * side[1], low + 0.15 * lift])]
     elif scene.action == "slide":
         direction = np.array([0.0, 1.0])
         c0 = np.array([obj[0] + 0.01 * side[1] + jitter(0.004), obj[1] - half_y - HAND_RADIUS, contact_z])
@@ -182,19 +197,19 @@ def _keyframes(
             amp *= _BANANA_SLIDE_REACH
             yaw += _BANANA_SLIDE_WRIST_YAW
         pre = [np.array([c0[0] + 0.02 * side[0] - 0.01, c0[1] - 0.02, contact_z + lift])]
-    else:  # show me: point at the object from above and to its right, then hold
+    else:  # show me: the hand stops just beside and above the object (its right), pointing at it
         direction = np.zeros(2)
         c0 = np.array(
             [
-                obj[0] + 0.035 + teacher.point_reach * 0.5,
-                obj[1] - half_y - 0.02 - teacher.point_reach,
-                TABLE_Z + height + 0.03 + lift,
+                obj[0] + teacher.point_reach * 0.5,
+                obj[1] - min(half_y, 0.025) - 0.012 - teacher.point_reach,  # above a long banana's end
+                TABLE_Z + height + 0.015 + 0.2 * lift,
             ]
         )
         pre = [0.5 * (home + c0) + np.array([0.0, 0.0, 0.01])]
 
     tempo = teacher.tempo * (1.0 + jitter(0.08))
-    reach_s, descend_s, act_s, hold_s, back_s = np.array([1.2, 0.5, 1.3, 0.3, 0.9]) / tempo
+    reach_s, descend_s, act_s, hold_s, back_s = np.array([1.1, 0.45, 1.2, 0.25, 0.8]) / tempo
     act_s *= 0.6 + amp / 0.045 * 0.4
     pause_s = teacher.hesitation * (1.0 + jitter(0.2)) if teacher.hesitation > 0 else 0.0
     idle_s = float(rng.uniform(0.1, 0.4))
@@ -202,20 +217,20 @@ def _keyframes(
     end[:2] += direction * amp
     back = end + (home - end) * teacher.retreat * 0.8
     back[2] = max(back[2], end[2] + 0.02)
-    frames: list[tuple[np.ndarray, float, float]] = [(home, idle_s, teacher.wrist_yaw)]
+    frames: list[tuple[np.ndarray, float, float]] = [(home, idle_s, float(HOME_POSTURE[4]))]
     frames += [(p, reach_s / len(pre), yaw) for p in pre]
     frames.append((c0, descend_s, yaw))
     if pause_s > 0:
         frames.append((c0 + np.array([0.0, 0.0, 0.002]), pause_s, yaw))
     contact_index = len(frames)
     if scene.action == "show me":  # the pointing gesture: a small dip towards the object, then hold
-        frames.append((c0 + np.array([0.006, 0.004, -0.012]), act_s * 0.6, yaw))
+        frames.append((c0 + np.array([0.002, 0.008, -0.01]), act_s * 0.6, yaw))
         contact_index = -1
     else:
         frames.append((end, act_s, yaw))
     frames.append((frames[-1][0], hold_s, yaw))
     frames.append((back, back_s, teacher.wrist_yaw))
-    return frames, contact_index, direction, amp
+    return frames, contact_index, direction
 
 
 def generate_motion(scene: Scene, teacher: Teacher, rng: np.random.Generator) -> Motion:
@@ -226,10 +241,10 @@ def generate_motion(scene: Scene, teacher: Teacher, rng: np.random.Generator) ->
     solution (smooth joints within `JOINT_LIMITS`). The object moves with the hand while in
     contact, only along the action's direction (it is pushed, pulled, slid; never lifted).
     """
-    obj0 = OBJECT_HOME + np.asarray(teacher.placement) + rng.normal(0.0, [0.004, 0.006])
+    obj0 = OBJECT_HOME + np.asarray(teacher.placement) + rng.normal(0.0, [0.003, 0.006])
     yaw0 = float(rng.normal(0.0, 0.25))
     home = forward_kinematics(HOME_POSTURE)["hand"]
-    frames, contact_index, direction, _ = _keyframes(scene, teacher, rng, obj0, home)
+    frames, contact_index, direction = _keyframes(scene, teacher, rng, obj0, home)
 
     durations = np.array([d for _, d, _ in frames[1:]])
     total = float(np.clip(durations.sum() + frames[0][1], MIN_DURATION_S, MAX_DURATION_S))

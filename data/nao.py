@@ -74,6 +74,12 @@ def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
 
 def _chain(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint origins [5,3], world joint axes [5,3] and hand position [3] for angles q."""
+    origins, axes, hand, _ = _chain_with_rotation(q)
+    return origins, axes, hand
+
+
+def _chain_with_rotation(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`_chain` plus the orientation [3,3] of the hand (the frame after RWristYaw)."""
     rot = np.eye(3)
     pos = np.zeros(3)
     origins = np.empty((5, 3))
@@ -83,7 +89,7 @@ def _chain(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         origins[i] = pos
         axes[i] = rot @ _JOINT_AXES[i]
         rot = rot @ _rotation(_JOINT_AXES[i], float(q[i]))
-    return origins, axes, pos + rot @ _HAND_OFFSET
+    return origins, axes, pos + rot @ _HAND_OFFSET, rot
 
 
 def _check_q(q: np.ndarray | list[float]) -> np.ndarray:
@@ -97,6 +103,12 @@ def forward_kinematics(q: np.ndarray | list[float]) -> dict[str, np.ndarray]:
     """Positions (metres, torso frame) of shoulder, elbow, wrist and hand for joint angles q [5]."""
     origins, _, hand = _chain(_check_q(q))
     return {"shoulder": origins[0], "elbow": origins[2], "wrist": origins[4], "hand": hand}
+
+
+def arm_pose(q: np.ndarray | list[float]) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """`forward_kinematics` and the hand's orientation [3,3] (columns: the hand's x, y, z axes)."""
+    origins, _, hand, rot = _chain_with_rotation(_check_q(q))
+    return {"shoulder": origins[0], "elbow": origins[2], "wrist": origins[4], "hand": hand}, rot
 
 
 def forward_kinematics_batch(joints: np.ndarray) -> dict[str, np.ndarray]:

@@ -47,7 +47,9 @@ def auditory_config(io: int | None = None) -> MTRNNConfig:
         from model.encoding.utterance import PHONEMES
 
         io = len(PHONEMES)
-    return MTRNNConfig(io=io, cf=80, cs=23, tau_io=2, tau_cf=5, tau_cs=70, io_activation="softmax", csc_init=0.01)
+    return MTRNNConfig(
+        io=io, cf=80, cs=23, tau_io=2, tau_cf=5, tau_cs=70, io_activation="softmax", csc_init=0.01
+    )
 
 
 def somatosensory_config() -> MTRNNConfig:

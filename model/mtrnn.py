@@ -10,8 +10,10 @@ The same network is used two ways:
 - with *context abstraction* (MTRNN_s, MTRNN_v): the network reads a sequence and its Csc internal
   state at the final step T is the abstracted context c_T (`abstract`).
 
-Implementation: one masked dense weight matrix for all blocks, and for the encoders the input
-projection computed for all time steps at once (the "fused" form).
+Implementation (the "fused" form, ~2x one nn.Linear per block, see benchmarks/train_speed.py):
+one masked dense weight matrix for all blocks with 1/tau folded in, and every input that does not
+depend on the network's own state (the encoders' sensory input, the generator's teacher part of
+eq. 5) projected for all time steps at once.
 """
 
 from __future__ import annotations
@@ -87,9 +89,12 @@ class MTRNN(nn.Module):
             return torch.cat([torch.softmax(z[..., :io], dim=-1), scaled_logistic(z[..., io:])], dim=-1)
         return scaled_logistic(z)
 
-    def _leak(self, z: Tensor, drive: Tensor) -> Tensor:
-        """eq. (3): z_t = (1 - 1/tau) z_{t-1} + (1/tau) (sum_j w_ij x_t,j + b_i)."""
-        return (1.0 - 1.0 / self.tau) * z + drive / self.tau
+    def _scaled_parameters(self) -> tuple[Tensor, Tensor, Tensor]:
+        """eq. (3) with 1/tau folded in once per pass: z_t = decay * z_{t-1} + x_t @ W' + b', where
+        W' = (w / tau_i)^T (masked) and b' = b / tau. Fewer operations per step than
+        applying 1/tau to every drive."""
+        inv_tau = 1.0 / self.tau
+        return (self.masked_weight() * inv_tau[:, None]).T, self.bias * inv_tau, 1.0 - inv_tau
 
     def initial_state(self, batch: int, c0: Tensor | None = None) -> Tensor:
         """z_0: the Csc units hold c_0 (eq. 3, t = 0), every other unit starts at 0."""
@@ -107,20 +112,24 @@ class MTRNN(nn.Module):
         """
         batch, steps, _ = inputs.shape
         io = self.cfg.io
-        w = self.masked_weight()
-        drive_in = inputs @ w[:, :io].T + self.bias  # input projection for all steps at once
-        w_rec = w[:, io:].T
+        w, b, decay = self._scaled_parameters()
+        # The input projection for all steps at once; unbind (not drive_in[:, t]) so that BPTT
+        # gathers the per-step gradients in one stack instead of one full-size buffer per step.
+        drive_in = (inputs @ w[:io] + b).unbind(1)
+        w_rec = w[io:].contiguous()
         z = self.initial_state(batch)
-        y = self.activation(z)
+        y_rec = self.activation(z)[:, io:]
         states = []
         for t in range(steps):
-            z = self._leak(z, drive_in[:, t] + y[:, io:] @ w_rec)
-            y = self.activation(z)
-            states.append(z)
+            z = torch.addmm(decay * z + drive_in[t], y_rec, w_rec)  # eq. (3)
+            y_rec = scaled_logistic(z[:, io:])  # eq. (4): only Cf and Cs feed the next step
+            states.append(z if return_states else z[:, self.csc_slice])
         trajectory = torch.stack(states, dim=1)
-        last = (lengths - 1) if lengths is not None else torch.full((batch,), steps - 1)
-        c_t = trajectory[torch.arange(batch), last.long(), self.csc_slice]
-        return (c_t, trajectory) if return_states else c_t
+        last = (lengths.long() - 1) if lengths is not None else torch.full((batch,), steps - 1)
+        rows = torch.arange(batch)
+        if not return_states:
+            return trajectory[rows, last]
+        return trajectory[rows, last, self.csc_slice], trajectory
 
     def generate(
         self,
@@ -136,19 +145,23 @@ class MTRNN(nn.Module):
         teacher) the generation is closed-loop.
         """
         io = self.cfg.io
-        w = self.masked_weight().T
+        w, b, decay = self._scaled_parameters()
+        if teacher is not None and alpha > 0.0:
+            # eq. (5) split by linearity: the teacher's part alpha y*_{t-1} W' is projected for all
+            # steps at once, the network's own (1 - alpha) y_{t-1} is folded into the IO rows of W'.
+            drive = (alpha * teacher[:, : steps - 1] @ w[:io] + b).unbind(1)
+            w = torch.cat([(1.0 - alpha) * w[:io], w[io:]])
+        else:
+            drive = (b,) * (steps - 1)
         z = self.initial_state(c0.shape[0], c0)
         y = self.activation(z)
         outputs, states = [y[:, :io]], [z]
         for t in range(1, steps):
-            x_io = y[:, :io]
-            if teacher is not None and alpha > 0.0:
-                x_io = alpha * teacher[:, t - 1] + (1.0 - alpha) * x_io
-            x = torch.cat([x_io, y[:, io:]], dim=-1)
-            z = self._leak(z, x @ w + self.bias)
+            z = torch.addmm(decay * z + drive[t - 1], y, w)  # eqs. (3), (5)
             y = self.activation(z)
             outputs.append(y[:, :io])
-            states.append(z)
+            if return_states:
+                states.append(z)
         activity = torch.stack(outputs, dim=1)
         return (activity, torch.stack(states, dim=1)) if return_states else activity
 

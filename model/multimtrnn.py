@@ -56,7 +56,13 @@ class CellAssemblies(nn.Module):
 
     def __init__(self, csc_s: int, csc_v: int, csc_a: int, weight_init: float = 0.025, seed: int = 0) -> None:
         super().__init__()
-        self._kwargs = {"csc_s": csc_s, "csc_v": csc_v, "csc_a": csc_a, "weight_init": weight_init, "seed": seed}
+        self._kwargs = {
+            "csc_s": csc_s,
+            "csc_v": csc_v,
+            "csc_a": csc_a,
+            "weight_init": weight_init,
+            "seed": seed,
+        }
         g = torch.Generator().manual_seed(seed)
         self.weight = nn.Parameter((torch.rand(csc_a, csc_s + csc_v, generator=g) * 2 - 1) * weight_init)
         self.bias = nn.Parameter((torch.rand(csc_a, generator=g) * 2 - 1) * weight_init)
@@ -115,7 +121,9 @@ def _net_trace(net: MTRNN, states: Tensor) -> NetTrace:
     )
 
 
-def pad_sequences(sequences: Sequence[np.ndarray | Tensor], columns: int | None = None) -> tuple[Tensor, Tensor]:
+def pad_sequences(
+    sequences: Sequence[np.ndarray | Tensor], columns: int | None = None
+) -> tuple[Tensor, Tensor]:
     """Variable-length [T_i, F] arrays -> zero-padded float32 [B, T_max, F] and lengths [B].
 
     `columns` keeps the first columns only (e.g. the 19 paper features of 21-column vision)."""
@@ -185,7 +193,9 @@ class MultiMTRNN(nn.Module):
         return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
 
     @staticmethod
-    def _batch(x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: int) -> tuple[Tensor, Tensor]:
+    def _batch(
+        x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: int
+    ) -> tuple[Tensor, Tensor]:
         if isinstance(x, Tensor) and x.ndim == 3:
             if lengths is None:
                 lengths = torch.full((x.shape[0],), x.shape[1])
@@ -210,7 +220,12 @@ class MultiMTRNN(nn.Module):
         return self.auditory.generate(c_a0, steps or self.config.generation_steps)
 
     def _description(
-        self, activity: np.ndarray, lexicon: Lexicon, c_a: np.ndarray, c_s: np.ndarray | None, c_v: np.ndarray | None
+        self,
+        activity: np.ndarray,
+        lexicon: Lexicon,
+        c_a: np.ndarray,
+        c_s: np.ndarray | None,
+        c_v: np.ndarray | None,
     ) -> Description:
         phonemes, words, text = decode_text(activity, lexicon)
         return Description(text, words, phonemes, activity, c_s, c_v, c_a)
@@ -240,7 +255,9 @@ class MultiMTRNN(nn.Module):
         return self._description(activity, lexicon, c[0].numpy(), None, None)
 
     @torch.no_grad()
-    def activity_trace(self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon) -> ActivityTrace:
+    def activity_trace(
+        self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon
+    ) -> ActivityTrace:
         """Every layer's activity over time in all three nets for one scene."""
         p, p_len = pad_sequences([proprioception], self.config.somatosensory.io)
         v, v_len = pad_sequences([vision], self.config.visual.io)
@@ -248,7 +265,9 @@ class MultiMTRNN(nn.Module):
         c_v, v_states = self.visual.abstract(v, v_len, return_states=True)
         c_a = self.assemblies(c_s, c_v)
         activity, a_states = self.auditory.generate(c_a, self.config.generation_steps, return_states=True)
-        description = self._description(activity[0].numpy(), lexicon, c_a[0].numpy(), c_s[0].numpy(), c_v[0].numpy())
+        description = self._description(
+            activity[0].numpy(), lexicon, c_a[0].numpy(), c_s[0].numpy(), c_v[0].numpy()
+        )
         return ActivityTrace(
             somatosensory=_net_trace(self.somatosensory, s_states[0]),
             visual=_net_trace(self.visual, v_states[0]),

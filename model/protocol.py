@@ -85,10 +85,20 @@ def _deep_copy(d: Mapping[str, Any]) -> dict[str, Any]:
     return {k: _deep_copy(v) if isinstance(v, Mapping) else v for k, v in d.items()}
 
 
-def default_config() -> dict[str, Any]:
+def default_config(mode: str = "faithful") -> dict[str, Any]:
+    """The full default config of a mode as a dict (the peer has its own sizes)."""
+    if mode == "peer":
+        from model.peer import default_config as peer_default
+
+        return peer_default()
     from model.config import MultiMTRNNConfig
 
     return MultiMTRNNConfig().to_dict()
+
+
+def runner_for(mode: str) -> str:
+    """The worker function of a mode: the MultiMTRNN's `run_once`, or the peer baseline's."""
+    return "model.peer:run_once" if mode == "peer" else DEFAULT_RUNNER
 
 
 def plan(
@@ -136,7 +146,7 @@ class RunOutcome:
 
 
 def resolve(path: str) -> Callable[..., Any]:
-    """"package.module:function" -> the function (importable in any worker process)."""
+    """ "package.module:function" -> the function (importable in any worker process)."""
     module, _, name = path.partition(":")
     return getattr(importlib.import_module(module), name)
 
@@ -166,9 +176,7 @@ def execute_run(data: Any, spec: RunSpec, runner: str = DEFAULT_RUNNER) -> RunOu
     torch.set_num_threads(1)
     started = time.perf_counter()
     try:
-        from model.config import MultiMTRNNConfig
-
-        config = MultiMTRNNConfig.from_dict(dict(spec.config)) if spec.config else None
+        config = _deep_copy(spec.config) if spec.config else None  # runners take the config as a dict
         run_once = resolve(runner)
         with tempfile.TemporaryDirectory(prefix="mtrnn-run-") as tmp:
             result = run_once(data, spec.mode, spec.fold, spec.seed, config=config, out_dir=Path(tmp))
@@ -217,7 +225,9 @@ def _pool_task(spec: RunSpec, runner: str) -> RunOutcome:
 def _local_outcomes(data: Any, specs: list[RunSpec], runner: str, workers: int) -> Iterator[RunOutcome]:
     """One process per core; the data is sent to each worker once."""
     ctx = multiprocessing.get_context("spawn")  # no forked torch state
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(data,)) as pool:
+    with ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(data,)
+    ) as pool:
         pending: set[Future] = {pool.submit(_pool_task, s, runner) for s in specs}
         try:
             while pending:

@@ -263,6 +263,13 @@ class RunStore:
     ) -> None:
         """Commit one finished run: metrics per split, artifacts and status in one transaction."""
         with self._transaction() as db:
+            cur = db.execute(
+                "UPDATE runs SET status = 'done', seconds = ?, checkpoint = ?, finished = ?, error = NULL "
+                "WHERE key = ?",
+                (seconds, checkpoint, time.time(), key),
+            )
+            if cur.rowcount != 1:
+                raise KeyError(f"run {key} was never registered")
             db.execute("DELETE FROM metrics WHERE run_key = ?", (key,))
             db.execute("DELETE FROM artifacts WHERE run_key = ?", (key,))
             for split, values in metrics.items():
@@ -277,13 +284,6 @@ class RunStore:
                     "INSERT INTO artifacts(run_key, name, json) VALUES (?, ?, ?)",
                     (key, name, canonical_json(value)),
                 )
-            cur = db.execute(
-                "UPDATE runs SET status = 'done', seconds = ?, checkpoint = ?, finished = ?, error = NULL "
-                "WHERE key = ?",
-                (seconds, checkpoint, time.time(), key),
-            )
-            if cur.rowcount != 1:
-                raise KeyError(f"run {key} was never registered")
 
     def fail(self, key: str, error: str) -> None:
         with self._transaction() as db:
@@ -296,7 +296,7 @@ class RunStore:
         status: str | None = "done",
         keys: list[str] | None = None,
     ) -> list[RunRecord]:
-        """Runs with their configs and metrics ({split: {name: value}}), ordered by mode, params, fold, init."""
+        """Runs with configs and metrics ({split: {name: value}}), by mode, params, fold, init."""
         where, args = [], []
         for column, value in (("r.experiment", experiment), ("r.mode", mode), ("r.status", status)):
             if value is not None:
@@ -338,7 +338,9 @@ class RunStore:
 
     def artifact(self, key: str, name: str) -> Any | None:
         with self._read() as db:
-            row = db.execute("SELECT json FROM artifacts WHERE run_key = ? AND name = ?", (key, name)).fetchone()
+            row = db.execute(
+                "SELECT json FROM artifacts WHERE run_key = ? AND name = ?", (key, name)
+            ).fetchone()
         return None if row is None else json.loads(row["json"])
 
     def experiments(self) -> list[str]:

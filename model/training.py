@@ -32,8 +32,8 @@ from torch import Tensor, nn
 from model.config import MultiMTRNNConfig, TrainingConfig
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES, Lexicon, encode_utterance
-from model.multimtrnn import MultiMTRNN, pad_sequences
 from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
+from model.multimtrnn import MultiMTRNN, pad_sequences
 
 log = logging.getLogger(__name__)
 
@@ -198,7 +198,7 @@ def train_auditory(
         loss = kl_divergence(targets, output)
         loss.backward()
         optimiser.step()
-        report("auditory", epoch, epochs, float(loss), c0)
+        report("auditory", epoch, epochs, loss.item(), c0)
     return c0
 
 
@@ -217,14 +217,18 @@ def train_encoder(
     step (eq. 11), the targets c_T (init +-1) move with a psi-scaled step (eq. 12).
 
     Returns the c_T table [B, csc] (unchanged when psi = 0)."""
-    c_t = nn.Parameter(_uniform((inputs.shape[0], net.cfg.csc), net.cfg.csc_init, generator), requires_grad=psi > 0)
-    optimiser = make_optimiser([{"params": list(net.parameters())}, {"params": [c_t], "scale": psi}], training)
+    c_t = nn.Parameter(
+        _uniform((inputs.shape[0], net.cfg.csc), net.cfg.csc_init, generator), requires_grad=psi > 0
+    )
+    optimiser = make_optimiser(
+        [{"params": list(net.parameters())}, {"params": [c_t], "scale": psi}], training
+    )
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         loss = context_abstraction_loss(net, net.abstract(inputs, lengths), c_t, psi)
         loss.backward()
         optimiser.step()
-        report(stage, epoch, epochs, float(loss), c_t)
+        report(stage, epoch, epochs, loss.item(), c_t)
     return c_t
 
 
@@ -252,7 +256,7 @@ def fit_assemblies(
         loss = assemblies_loss(assemblies, c_s, c_v, c_a0)
         loss.backward()
         optimiser.step()
-        report("assemblies", epoch, epochs, float(loss))
+        report("assemblies", epoch, epochs, loss.item())
 
 
 def prepare(data: SequenceSet, config: MultiMTRNNConfig | None) -> MultiMTRNNConfig:
@@ -289,7 +293,9 @@ def train_faithful(
     seconds: dict[str, float] = {}
 
     start = time.perf_counter()
-    c_a0 = train_auditory(model.auditory, batch.utterances, training, torch.Generator().manual_seed(seed + 1), report)
+    c_a0 = train_auditory(
+        model.auditory, batch.utterances, training, torch.Generator().manual_seed(seed + 1), report
+    )
     seconds["auditory"] = time.perf_counter() - start
 
     start = time.perf_counter()
@@ -322,7 +328,9 @@ def train_faithful(
 
     start = time.perf_counter()
     with torch.no_grad():
-        c_s, c_v = model.abstract(batch.proprioception, batch.vision, batch.proprioception_lengths, batch.vision_lengths)
+        c_s, c_v = model.abstract(
+            batch.proprioception, batch.vision, batch.proprioception_lengths, batch.vision_lengths
+        )
     fit_assemblies(model.assemblies, c_s, c_v, c_a0, training, report)
     seconds["assemblies"] = time.perf_counter() - start
 
@@ -360,7 +368,13 @@ def train(
         start = time.perf_counter()
         result = MODES[mode](data, config, seed, progress)
         result.meta.setdefault("seconds_total", time.perf_counter() - start)
-        log.info("trained %s (seed %d) on %d sequences in %.1f s", mode, seed, len(data), time.perf_counter() - start)
+        log.info(
+            "trained %s (seed %d) on %d sequences in %.1f s",
+            mode,
+            seed,
+            len(data),
+            time.perf_counter() - start,
+        )
         return result
     finally:
         torch.set_num_threads(threads)

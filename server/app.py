@@ -41,7 +41,9 @@ def _include_routers(app: FastAPI) -> None:
             app.include_router(router)
 
 
-def create_app(settings: Settings | None = None, make_state: Callable[[Settings], AppState] | None = None) -> FastAPI:
+def create_app(
+    settings: Settings | None = None, make_state: Callable[[Settings], AppState] | None = None
+) -> FastAPI:
     """The ASGI app. `make_state` builds the AppState (default: the shipped corpus and models)."""
     settings = settings or Settings.from_env()
     make_state = make_state or AppState
@@ -78,7 +80,9 @@ def create_app(settings: Settings | None = None, make_state: Callable[[Settings]
 
     @app.get("/vendor/plotly.min.js", include_in_schema=False)
     def plotly_js() -> FileResponse:
-        return FileResponse(PLOTLY_JS, media_type="text/javascript", headers={"Cache-Control": "max-age=86400"})
+        return FileResponse(
+            PLOTLY_JS, media_type="text/javascript", headers={"Cache-Control": "max-age=86400"}
+        )
 
     app.mount("/", StaticFiles(directory=settings.web_dir, html=True), name="web")
     return app

@@ -1,12 +1,12 @@
 """Settings of the explorer app, read from the environment (prefix ``MTRNN_``).
 
-    MTRNN_HOST, MTRNN_PORT        where uvicorn listens (default 127.0.0.1:8000)
-    MTRNN_MODELS_DIR              folder of shipped models, one sub-folder per model
-                                  (model.safetensors + meta.json); default data/artefacts/models
-    MTRNN_MODEL                   the model served first (default: "default", else the first found)
-    MTRNN_CORPUS                  encoded corpus file (default: data.corpus's own default)
-    MTRNN_VISER                   "0" starts the app without the 3D viewer (scripts, benchmarks)
-    MTRNN_FRAME_CACHE             how many corpus recordings keep their re-rendered frames (default 8)
+MTRNN_HOST, MTRNN_PORT        where uvicorn listens (default 127.0.0.1:8000)
+MTRNN_MODELS_DIR              folder of shipped models, one sub-folder per model
+                              (model.safetensors + meta.json); default data/artefacts/models
+MTRNN_MODEL                   the model served first (default: "default", else the first found)
+MTRNN_CORPUS                  encoded corpus file (default: data.corpus's own default)
+MTRNN_VISER                   "0" starts the app without the 3D viewer (scripts, benchmarks)
+MTRNN_FRAME_CACHE             how many corpus recordings keep their re-rendered frames (default 8)
 """
 
 from __future__ import annotations

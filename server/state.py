@@ -14,11 +14,11 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import cv2
 import numpy as np
-from fastapi import HTTPException, Request
+from fastapi import Depends, HTTPException, Request
 
 from server.settings import Settings
 
@@ -52,8 +52,8 @@ class Backend:
     def load_corpus(self, path: Path | None) -> Any:
         return self._corpus.load_corpus(path)
 
-    def export_recording(self, rid: str) -> Any:
-        return self._corpus.export_recording(rid)
+    def export_recording(self, rid: str, seed: int) -> Any:
+        return self._corpus.export_recording(rid, seed)
 
     def read_recording(self, data: bytes, filename: str) -> Any:
         return self._recording.read_recording(data, filename)
@@ -72,14 +72,21 @@ class Backend:
         return self._vision.pipeline_steps(frame).rays
 
     # model/
-    def load_model(self, directory: Path) -> tuple[Any, dict]:
-        return self._checkpoint.load(directory)
+    def load_model(self, directory: Path) -> tuple[Any, dict, Any]:
+        """(model, meta.json, lexicon of the words it was trained on)."""
+        model, meta = self._checkpoint.load(directory)
+        return model, meta, self._utterance.Lexicon(meta["lexicon"])
 
-    def describe(self, model: Any, prop: np.ndarray, vis: np.ndarray) -> Any:
-        return model.describe(prop, vis)
+    def describe(self, model: Any, lexicon: Any, prop: np.ndarray, vis: np.ndarray) -> Any:
+        return model.describe(prop, vis, lexicon)
 
-    def generate(self, model: Any, c_a: np.ndarray) -> Any:
-        return model.generate_from_csc(c_a)
+    def describe_batch(
+        self, model: Any, lexicon: Any, props: list[np.ndarray], vis: list[np.ndarray]
+    ) -> list:
+        return model.describe_batch(props, vis, lexicon)
+
+    def generate(self, model: Any, lexicon: Any, c_a: np.ndarray) -> Any:
+        return model.generate_from_csc(c_a, lexicon)
 
     def pca(self, n_components: int) -> Any:
         return self._metrics.CscPCA(n_components)
@@ -144,15 +151,17 @@ class LoadedModel:
     name: str
     path: Path
     model: Any
+    lexicon: Any
     meta: dict
     train_ids: frozenset[str]
     test_ids: frozenset[str]
 
 
-def _split_ids(meta: dict) -> tuple[frozenset[str], frozenset[str]]:
-    """Recording or scene ids of the model's training and test sets, from meta.json's ``split``."""
-    split = meta.get("split") or {}
-    return frozenset(split.get("train", [])), frozenset(split.get("test", []))
+def _split_ids(meta: dict, corpus_ids: list[str]) -> tuple[frozenset[str], frozenset[str]]:
+    """Training and test recording ids: meta.json's ``ids`` are what the model was trained on; the
+    rest of the corpus is its test set."""
+    train = frozenset(meta.get("ids", []))
+    return train, frozenset(rid for rid in corpus_ids if rid not in train)
 
 
 class AppState:
@@ -172,6 +181,7 @@ class AppState:
             )
         first = settings.model if settings.model in self.model_dirs else next(iter(self.model_dirs))
         self._lock = threading.RLock()  # model calls and cache updates
+        self._csc_lock = threading.Lock()  # one Csc computation at a time
         self._loaded: dict[str, LoadedModel] = {}
         self._current = self._load(first)
         self._csc: dict[str, CscCache] = {}
@@ -194,9 +204,9 @@ class AppState:
 
     def _load(self, name: str) -> LoadedModel:
         if name not in self._loaded:
-            model, meta = self.backend.load_model(self.model_dirs[name])
-            train, test = _split_ids(meta)
-            self._loaded[name] = LoadedModel(name, self.model_dirs[name], model, meta, train, test)
+            model, meta, lexicon = self.backend.load_model(self.model_dirs[name])
+            train, test = _split_ids(meta, list(self.entries))
+            self._loaded[name] = LoadedModel(name, self.model_dirs[name], model, lexicon, meta, train, test)
         return self._loaded[name]
 
     @property
@@ -222,13 +232,11 @@ class AppState:
         return self._current
 
     def split_of(self, rid: str) -> str:
-        """'train' or 'test' for the served model (by recording id or by scene id), else 'unknown'."""
-        entry = self.entries.get(rid)
-        scene = entry.scene.id if entry is not None else rid
+        """'train' or 'test' for the served model, 'unknown' for ids outside the corpus."""
         m = self._current
-        if rid in m.train_ids or scene in m.train_ids:
+        if rid in m.train_ids:
             return "train"
-        if rid in m.test_ids or scene in m.test_ids:
+        if rid in m.test_ids:
             return "test"
         return "unknown"
 
@@ -236,7 +244,7 @@ class AppState:
     def _describe(self, prop: np.ndarray, vis: np.ndarray, expected: str | None, timings: dict) -> Result:
         t0 = time.perf_counter()
         with self._lock:
-            d = self.backend.describe(self._current.model, prop, vis)
+            d = self.backend.describe(self._current.model, self._current.lexicon, prop, vis)
         timings["model_ms"] = (time.perf_counter() - t0) * 1e3
         target = self.backend.encode_utterance(expected) if expected else None
         return Result(
@@ -280,13 +288,15 @@ class AppState:
         try:
             return self.entries[rid]
         except KeyError:
-            raise HTTPException(404, f"no recording {rid!r} in the corpus (ids look like 'slide-red-apple-2')")
+            raise HTTPException(
+                404, f"no recording {rid!r} in the corpus (ids look like 'slide-red-apple-2')"
+            ) from None
 
     def upload(self, uid: str) -> Upload:
         try:
             return self._uploads[uid]
         except KeyError:
-            raise HTTPException(404, f"no upload {uid!r} (uploads are kept while the server runs)")
+            raise HTTPException(404, f"no upload {uid!r} (uploads are kept while the server runs)") from None
 
     # camera frames
     def frames(self, rid: str) -> np.ndarray:
@@ -298,7 +308,7 @@ class AppState:
             if rid in self._frames:
                 self._frames.move_to_end(rid)
                 return self._frames[rid]
-        frames = self.backend.export_recording(rid).frames
+        frames = self.backend.export_recording(rid, self.corpus.seed).frames
         with self._lock:
             self._frames[rid] = frames
             while len(self._frames) > self.settings.frame_cache:
@@ -323,20 +333,24 @@ class AppState:
     # Csc spaces
     def csc_cache(self) -> CscCache:
         """Csc patterns of every corpus recording under the served model, computed once per model."""
-        name = self._current.name
-        with self._lock:
-            if name in self._csc:
-                return self._csc[name]
+        m = self._current
+        with self._csc_lock:
+            if m.name in self._csc:
+                return self._csc[m.name]
             started = time.perf_counter()
             ids = list(self.entries)
             vectors: dict[str, list[np.ndarray]] = {s: [] for s in SPACES}
             generated = []
-            for rid in ids:
-                e = self.entries[rid]
-                d = self.backend.describe(self._current.model, e.proprioception, e.vision)
-                generated.append(d.text)
-                for s, v in zip(SPACES, (d.csc_s, d.csc_v, d.csc_a), strict=True):
-                    vectors[s].append(np.asarray(v, dtype=np.float64))
+            for start in range(0, len(ids), 32):
+                batch = [self.entries[rid] for rid in ids[start : start + 32]]
+                with self._lock:  # one batch at a time, so that describe requests interleave
+                    descriptions = self.backend.describe_batch(
+                        m.model, m.lexicon, [e.proprioception for e in batch], [e.vision for e in batch]
+                    )
+                for d in descriptions:
+                    generated.append(d.text)
+                    for s, v in zip(SPACES, (d.csc_s, d.csc_v, d.csc_a), strict=True):
+                        vectors[s].append(np.asarray(v, dtype=np.float64))
             actions = [self.entries[rid].scene.action for rid in ids]
             cache = CscCache(ids, generated)
             for s in SPACES:
@@ -350,8 +364,10 @@ class AppState:
                     explained_variance_ratio=[float(v) for v in full.explained_variance_ratio_],
                     measures={k: float(v) for k, v in self.backend.measures(x, actions).items()},
                 )
-            self._csc[name] = cache
-            logger.info("Csc spaces of %d recordings in %.1f s", len(ids), time.perf_counter() - started)
+            self._csc[m.name] = cache
+            logger.info(
+                "Csc spaces of %d recordings (%s) in %.1f s", len(ids), m.name, time.perf_counter() - started
+            )
             return cache
 
     def inverse_point(self, x: float, y: float) -> np.ndarray:
@@ -365,7 +381,9 @@ class AppState:
         p = self.csc_cache().spaces["a"].pca.transform(c_a[None, :])[0]
         return float(p[0]), float(p[1])
 
-    def nearest(self, space: str, vector: np.ndarray, k: int, exclude: str | None = None) -> list[tuple[str, float]]:
+    def nearest(
+        self, space: str, vector: np.ndarray, k: int, exclude: str | None = None
+    ) -> list[tuple[str, float]]:
         cache = self.csc_cache()
         dist = np.linalg.norm(cache.spaces[space].vectors - vector[None, :], axis=1)
         order = [i for i in np.argsort(dist, kind="stable") if cache.ids[i] != exclude]
@@ -373,9 +391,12 @@ class AppState:
 
     def generate(self, c_a: np.ndarray) -> Any:
         with self._lock:
-            return self.backend.generate(self._current.model, c_a)
+            return self.backend.generate(self._current.model, self._current.lexicon, c_a)
 
 
 def get_state(request: Request) -> AppState:
     """FastAPI dependency: the AppState created in the lifespan."""
     return request.app.state.mtrnn
+
+
+StateDep = Annotated[AppState, Depends(get_state)]

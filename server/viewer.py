@@ -82,6 +82,9 @@ class SceneViewer:
     def _build_scene(self) -> None:
         scene = self.server.scene
         scene.set_up_direction("+z")
+        self.server.initial_camera.position = (0.75, -0.65, 0.45)
+        self.server.initial_camera.look_at = (0.12, -0.1, 0.0)
+        self.server.gui.configure_theme(control_layout="collapsible", show_logo=False, show_share_button=False)
         self.table = scene.add_box(
             "/table", color=TABLE_RGB, dimensions=(0.5, 0.7, 0.02), position=(0.2, -0.1, -0.1)
         )
@@ -129,10 +132,17 @@ class SceneViewer:
         x, y = float(xy[0]), float(xy[1])
         if shape == "apple":
             self.objects["body"] = scene.add_icosphere(
-                "/object/body", radius=0.03, color=rgb, scale=(1.0, 1.0, 0.9), position=(x, y, table_z + 0.027)
+                "/object/body",
+                radius=0.03,
+                color=rgb,
+                scale=(1.0, 1.0, 0.9),
+                position=(x, y, table_z + 0.027),
             )
             self.objects["stem"] = scene.add_box(
-                "/object/stem", color=(90, 60, 30), dimensions=(0.005, 0.005, 0.02), position=(x, y, table_z + 0.06)
+                "/object/stem",
+                color=(90, 60, 30),
+                dimensions=(0.005, 0.005, 0.02),
+                position=(x, y, table_z + 0.06),
             )
         elif shape == "banana":
             ts = np.linspace(-1.0, 1.0, 7)
@@ -165,7 +175,9 @@ class SceneViewer:
         with self._lock, self.server.atomic():
             self._keypoints = keypoints
             self._fps = float(fps)
-            self.cursor = Cursor(source=source, t=0.0, duration_s=(len(joints) - 1) / fps, speed=self.cursor.speed)
+            self.cursor = Cursor(
+                source=source, t=0.0, duration_s=(len(joints) - 1) / fps, speed=self.cursor.speed
+            )
             self.table.position = (float(hand[:, 0].mean()), float(hand[:, 1].mean()), table_z - 0.01)
             self.table.dimensions = (
                 float(np.ptp(hand[:, 0])) + 0.35,

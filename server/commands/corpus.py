@@ -19,7 +19,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     build = sub.add_parser("build", help="simulate and encode the 64 scenes x 4 recordings")
     build.add_argument("--seed", type=int, default=0, help="corpus seed (same seed, same bytes)")
     build.add_argument("--workers", type=int, default=2, help="worker processes")
-    build.add_argument("--out", type=Path, default=None, help="output .npz (default data/artefacts/corpus.npz)")
+    build.add_argument("--out", type=Path, default=None, help="output .npz (default: data/artefacts/)")
     build.set_defaults(func=_build)
 
     export = sub.add_parser("export", help="write one corpus recording in format v1 (.zip or .npz)")
@@ -63,7 +63,7 @@ def _export(args: argparse.Namespace) -> int:
         try:
             parse_recording_id(rid)
         except ValueError as exc:
-            print(f"error: {exc}")
+            print(f"error: {args.recording!r} is neither a recording id nor a scene id ({exc})")
             return 2
     suffix = args.out.suffix.lower()
     if suffix not in (".zip", ".npz"):

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
-from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi import APIRouter, HTTPException, Query
 from starlette.concurrency import run_in_threadpool
 
 from server.schemas import (
@@ -17,15 +19,17 @@ from server.schemas import (
     Problem,
     Space,
 )
-from server.state import AppState, get_state
+from server.state import StateDep
 
 router = APIRouter(prefix="/api/csc", tags=["csc"])
 
 
 @router.get("", response_model=CscSpace)
 async def csc_space(
-    space: Space = Query(..., description="s (somatosensory c_s,T), v (visual c_v,T) or a (auditory c_a,0)"),
-    state: AppState = Depends(get_state),
+    state: StateDep,
+    space: Annotated[
+        Space, Query(description="s (somatosensory c_s,T), v (visual c_v,T) or a (auditory c_a,0)")
+    ],
 ) -> CscSpace:
     """PCA (exact SVD) of one Csc space over all corpus recordings, with the paper's cluster measures."""
     cache = await run_in_threadpool(state.csc_cache)
@@ -60,10 +64,10 @@ async def csc_space(
 
 @router.get("/neighbours", response_model=Neighbours, responses={404: {"model": Problem}})
 async def neighbours(
-    space: Space = Query(...),
-    id: str = Query(..., description="recording id"),
-    k: int = Query(5, ge=1, le=50),
-    state: AppState = Depends(get_state),
+    state: StateDep,
+    space: Annotated[Space, Query()],
+    id: Annotated[str, Query(description="recording id")],
+    k: Annotated[int, Query(ge=1, le=50)] = 5,
 ) -> Neighbours:
     """The k recordings whose Csc patterns are closest to this one's, in the original (not PCA) space."""
     state.entry(id)
@@ -77,7 +81,7 @@ async def neighbours(
 
 
 @router.post("/generate", response_model=Generated, responses={422: {"model": Problem}})
-async def generate(body: GenerateRequest, state: AppState = Depends(get_state)) -> Generated:
+async def generate(state: StateDep, body: GenerateRequest) -> Generated:
     """What the robot would say from a c_a,0: given directly, or a point of the auditory PCA plane."""
     cache = await run_in_threadpool(state.csc_cache)
     dims = cache.spaces["a"].vectors.shape[1]
@@ -93,7 +97,7 @@ async def generate(body: GenerateRequest, state: AppState = Depends(get_state)) 
         point = (float(body.point[0]), float(body.point[1]))
         c_a = state.inverse_point(*point)
     g = await run_in_threadpool(state.generate, c_a)
-    (rid, dist), = state.nearest("a", c_a, 1)
+    ((rid, dist),) = state.nearest("a", c_a, 1)
     text = cache.generated[cache.ids.index(rid)]
     return Generated(
         model=state.model.name,

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, HTTPException, Request
+from fastapi import APIRouter, HTTPException, Request
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from server.schemas import CscVectors, Description, Problem, RecordingDetail, Timings
-from server.state import VISION_FEATURE_NAMES, AppState, Result, get_state
+from server.state import VISION_FEATURE_NAMES, Result, StateDep
 
 router = APIRouter(prefix="/api", tags=["describe"])
 
@@ -37,7 +37,7 @@ def description_of(result: Result, rid: str, source: str, model: str, labels: li
 
 
 @router.post("/scenes/{rid}/describe", response_model=Description, responses={404: {"model": Problem}})
-def describe_scene(rid: str, state: AppState = Depends(get_state)) -> Description:
+def describe_scene(state: StateDep, rid: str) -> Description:
     """What the served model says about a corpus recording (from its stored encodings)."""
     result = state.describe_scene(rid)
     return description_of(result, rid, "corpus", state.model.name, state.backend.phoneme_labels)
@@ -71,7 +71,7 @@ async def _read_capped(upload: UploadFile, cap: int) -> bytes:
         }
     },
 )
-async def describe_upload(request: Request, state: AppState = Depends(get_state)) -> Description:
+async def describe_upload(state: StateDep, request: Request) -> Description:
     """Upload a recording in format v1 (multipart field ``recording``, a .zip or .npz) and describe it."""
     cap = state.backend.max_upload_bytes
     declared = request.headers.get("content-length")
@@ -96,7 +96,7 @@ async def describe_upload(request: Request, state: AppState = Depends(get_state)
 
 
 @router.get("/uploads/{uid}", response_model=RecordingDetail, responses={404: {"model": Problem}})
-def get_upload(uid: str, state: AppState = Depends(get_state)) -> RecordingDetail:
+def get_upload(state: StateDep, uid: str) -> RecordingDetail:
     """The time series of an uploaded recording (kept while the server runs)."""
     up = state.upload(uid)
     rec = up.recording
@@ -118,7 +118,7 @@ def get_upload(uid: str, state: AppState = Depends(get_state)) -> RecordingDetai
 
 
 @router.get("/uploads/{uid}/description", response_model=Description, responses={404: {"model": Problem}})
-def get_upload_description(uid: str, state: AppState = Depends(get_state)) -> Description:
+def get_upload_description(state: StateDep, uid: str) -> Description:
     """The description computed when the recording was uploaded."""
     up = state.upload(uid)
     return description_of(up.result, up.id, "upload", state.model.name, state.backend.phoneme_labels)

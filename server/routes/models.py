@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Depends, HTTPException
+from fastapi import APIRouter, HTTPException
 from starlette.concurrency import run_in_threadpool
 
 from server.schemas import ModelInfo, ModelList, Problem, SelectModel
-from server.state import AppState, get_state
+from server.state import AppState, StateDep
 
 router = APIRouter(prefix="/api/models", tags=["models"])
 
@@ -21,13 +21,13 @@ def _list(state: AppState) -> ModelList:
 
 
 @router.get("", response_model=ModelList)
-def list_models(state: AppState = Depends(get_state)) -> ModelList:
+def list_models(state: StateDep) -> ModelList:
     """Every model under the models folder (each with its meta.json), and which one is served."""
     return _list(state)
 
 
 @router.put("/selected", response_model=ModelList, responses={404: {"model": Problem}})
-async def select_model(body: SelectModel, state: AppState = Depends(get_state)) -> ModelList:
+async def select_model(state: StateDep, body: SelectModel) -> ModelList:
     """Serve another model: every later answer (describe, Csc, generate) comes from it."""
     try:
         await run_in_threadpool(state.select_model, body.name)

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Depends, Query, Response
+from fastapi import APIRouter, Query, Response
 
 from server.schemas import RecordingDetail, SceneList, SceneSummary
-from server.state import VISION_FEATURE_NAMES, AppState, get_state
+from server.state import VISION_FEATURE_NAMES, AppState, StateDep
 
 router = APIRouter(prefix="/api/scenes", tags=["scenes"])
 
@@ -30,13 +30,15 @@ def summary_of(state: AppState, entry) -> SceneSummary:  # noqa: ANN001 - a corp
 
 @router.get("", response_model=SceneList)
 def list_scenes(
-    action: str | None = Query(None, description="pull, push, show me or slide"),
-    colour: str | None = Query(None, description="blue, green, red or yellow"),
-    shape: str | None = Query(None, description="apple, banana, dice or phone"),
-    variant: int | None = Query(None, ge=0, le=3),
-    split: Literal["train", "test", "unknown"] | None = Query(None, description="for the served model"),
-    q: str | None = Query(None, description="substring of the id or utterance"),
-    state: AppState = Depends(get_state),
+    state: StateDep,
+    action: Annotated[str | None, Query(description="pull, push, show me or slide")] = None,
+    colour: Annotated[str | None, Query(description="blue, green, red or yellow")] = None,
+    shape: Annotated[str | None, Query(description="apple, banana, dice or phone")] = None,
+    variant: Annotated[int | None, Query(ge=0, le=3)] = None,
+    split: Annotated[
+        Literal["train", "test", "unknown"] | None, Query(description="for the served model")
+    ] = None,
+    q: Annotated[str | None, Query(description="substring of the id or utterance")] = None,
 ) -> SceneList:
     out = []
     for entry in state.entries.values():
@@ -58,7 +60,7 @@ def _rows(array) -> list[list[float]]:  # noqa: ANN001 - any 2-D array
 
 
 @router.get("/{rid}", response_model=RecordingDetail)
-def get_scene(rid: str, state: AppState = Depends(get_state)) -> RecordingDetail:
+def get_scene(state: StateDep, rid: str) -> RecordingDetail:
     entry = state.entry(rid)
     frames = len(entry.joints)
     return RecordingDetail(
@@ -83,11 +85,11 @@ def get_scene(rid: str, state: AppState = Depends(get_state)) -> RecordingDetail
     responses={200: {"content": {"image/jpeg": {}}}},
 )
 def get_frame(
+    state: StateDep,
     rid: str,
     index: int,
-    overlay: bool = Query(False, description="draw the vision pipeline's contour and 16 rays"),
-    width: int | None = Query(None, ge=16, le=1280, description="scale down to this width"),
-    state: AppState = Depends(get_state),
+    overlay: Annotated[bool, Query(description="draw the vision pipeline's contour and 16 rays")] = False,
+    width: Annotated[int | None, Query(ge=16, le=1280, description="scale down to this width")] = None,
 ) -> Response:
     """One camera frame of a corpus recording (re-rendered from its seed) or of an upload."""
     data = state.frame_jpeg(rid, index, overlay, width)

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import viser
 import websockets
-from fastapi import APIRouter, Depends, HTTPException, Request, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, HTTPException, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse
 from starlette.concurrency import run_in_threadpool
 
 from data.scenario import scene_from_utterance
 from server.schemas import Problem, ViewerCommand, ViewerState
-from server.state import AppState, get_state
+from server.state import AppState, StateDep
 from server.viewer import SceneViewer
 
 router = APIRouter(tags=["viewer"])
@@ -46,20 +46,24 @@ def show(state: AppState, source: str) -> None:
             with contextlib.suppress(ValueError):
                 scene = scene_from_utterance(up.result.expected)
                 colour, shape = scene.colour, scene.shape
-        viewer.show(source, up.recording.joints, float(getattr(up.recording, "fps", 20.0) or 20.0), colour, shape)
+        viewer.show(
+            source, up.recording.joints, float(getattr(up.recording, "fps", 20.0) or 20.0), colour, shape
+        )
     else:
         entry = state.entry(source)
         viewer.show(source, entry.joints, 20.0, entry.scene.colour, entry.scene.shape)
 
 
 @router.get("/api/viewer", response_model=ViewerState)
-def get_viewer(state: AppState = Depends(get_state)) -> ViewerState:
+def get_viewer(state: StateDep) -> ViewerState:
     """Where the shared time cursor is."""
     return _state(state)
 
 
-@router.post("/api/viewer", response_model=ViewerState, responses={404: {"model": Problem}, 503: {"model": Problem}})
-async def command_viewer(cmd: ViewerCommand, state: AppState = Depends(get_state)) -> ViewerState:
+@router.post(
+    "/api/viewer", response_model=ViewerState, responses={404: {"model": Problem}, 503: {"model": Problem}}
+)
+async def command_viewer(state: StateDep, cmd: ViewerCommand) -> ViewerState:
     """Show a recording, move the cursor, play, pause or change the speed."""
     viewer = _viewer(state)
     if cmd.show is not None and cmd.show != viewer.cursor.source:
@@ -104,7 +108,7 @@ async def viewer_socket(ws: WebSocket) -> None:
     try:
         while True:
             cmd = ViewerCommand(**json.loads(await ws.receive_text()))
-            await command_viewer(cmd, state)
+            await command_viewer(state, cmd)
     except (WebSocketDisconnect, ValueError, HTTPException):
         pass
     finally:
@@ -163,5 +167,5 @@ async def viser_proxy(ws: WebSocket) -> None:
         for task in tasks:
             task.cancel()
         await upstream.close()
-        with contextlib.suppress(RuntimeError):
+        with contextlib.suppress(RuntimeError, WebSocketDisconnect):
             await ws.close()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import zipfile
 from pathlib import Path
 
@@ -369,18 +370,37 @@ def test_absolute_member_path() -> None:
     assert "contains the unsafe path '/tmp/evil'" in read_err(buf.getvalue())
 
 
-def test_decompression_bomb_is_rejected_before_decompressing() -> None:
+def zeros_member_zip(megabytes: int) -> bytes:
+    """A valid recording plus `megabytes` MB of zeros that deflate to about 1/1000 of that."""
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("joints.csv", csv_text(good_rows()))
-        with z.open("frames/zeros.png", "w", force_zip64=True) as member:
-            block = bytes(16 * 1024**2)
-            for _ in range(26):  # 416 MB of zeros, ~0.4 MB compressed
-                member.write(block)
-    data = buf.getvalue()
-    assert len(data) < 2 * 1024**2
-    msg = read_err(data)
-    assert msg == "rec.zip would unpack to 416 MB, more than the limit of 400 MB (decompression bomb?)"
+        for name, data in valid_files().items():
+            z.writestr(name, data)
+        with z.open("extra/zeros.bin", "w", force_zip64=True) as member:
+            for _ in range(megabytes):
+                member.write(bytes(1024**2))
+    return buf.getvalue()
+
+
+def test_decompression_bomb_total_size_is_rejected_before_decompressing(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import data.recording as recording
+
+    monkeypatch.setattr(recording, "MAX_UNCOMPRESSED_BYTES", 4 * 1024**2)  # 400 MB in production
+    data = zeros_member_zip(6)
+    assert len(data) < 100 * 1024
+    assert read_err(data) == "rec.zip would unpack to 6 MB, more than the limit of 4 MB (decompression bomb?)"
+
+
+def test_decompression_bomb_compression_ratio_is_rejected(monkeypatch: pytest.MonkeyPatch) -> None:
+    import data.recording as recording
+
+    monkeypatch.setattr(recording, "BOMB_MIN_MEMBER_BYTES", 2 * 1024**2)  # 50 MB in production
+    msg = read_err(zeros_member_zip(3))
+    assert re.fullmatch(
+        r"rec.zip: member 'extra/zeros.bin' expands \d+-fold to 3 MB \(decompression bomb\?\)", msg
+    )
 
 
 def test_invalid_meta_json() -> None:

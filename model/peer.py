@@ -1,0 +1,310 @@
+"""Peer baseline (`--mode peer`): a GRU encoder-decoder in the style of paired recurrent autoencoders.
+
+Paired recurrent autoencoders (Yamada et al. 2018, "Paired recurrent autoencoders for
+bidirectional translation between robot actions and linguistic descriptions") learn one
+autoencoder per modality and bind their latent codes. Here, to describe scenes exactly as the
+MultiMTRNN does (same inputs, same outputs, same folds, same metrics):
+
+    proprioception [T, 5]  -> GRU -> code_s [12]  \\
+                                                    -> fusion -> z [12] -> GRU decoder -> phonemes
+    vision [T, 19]         -> GRU -> code_v [12]  /                 ^
+    utterance [T_a, 44]    -> GRU -> code_l [12] --(binding)--------/  (language autoencoder)
+
+Loss = KLD(decoder(z), utterance) (describe) + KLD(decoder(code_l), utterance) (reconstruct)
+     + binding * |z - code_l|^2 (PRAE's binding of the two latent spaces).
+
+The decoder produces the same softmax phoneme activity as MTRNN_a and runs closed-loop; during
+training its input is alpha * the target of the previous step + (1 - alpha) * its own previous
+output, as eq. (5) does for MTRNN_a. code_s, code_v and z play the roles of c_s,T, c_v,T and
+c_a,0, so the Csc measures and PCA panels apply unchanged. Full-batch Adam.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from safetensors.torch import load_file, save_file
+from torch import Tensor, nn
+
+from model.data import SequenceSet
+from model.encoding.utterance import PHONEMES, Lexicon, decode_text
+from model.multimtrnn import Description, pad_sequences
+
+logger = logging.getLogger(__name__)
+
+WEIGHTS = "model.safetensors"
+META = "meta.json"
+
+
+@dataclass
+class PeerConfig:
+    """Sizes and training of the peer baseline."""
+
+    hidden: int = 64  # GRU units of every encoder and of the decoder
+    code: int = 12  # latent code size, as |Csc| of the MultiMTRNN
+    proprioception: int = 5
+    vision: int = 19  # the paper's 19 visual features (the centroid is left out, as for MTRNN_v)
+    phonemes: int = len(PHONEMES)
+    alpha: float = 0.1  # teacher forcing of the decoder's input (as eq. 5)
+    binding: float = 1.0  # weight of |z - code_l|^2
+    lr: float = 1e-2  # Adam
+    epochs: int = 400
+    margin: int = 10  # silent steps after the longest training utterance (as model.training)
+    progress_every: int = 10
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PeerConfig:
+        return cls(**d)
+
+
+def default_config() -> dict[str, Any]:
+    return PeerConfig().to_dict()
+
+
+class SequenceEncoder(nn.Module):
+    """GRU over a padded batch; the code is tanh(W h_T) of each sequence's last valid step."""
+
+    def __init__(self, inputs: int, hidden: int, code: int) -> None:
+        super().__init__()
+        self.gru = nn.GRU(inputs, hidden, batch_first=True)
+        self.out = nn.Linear(hidden, code)
+
+    def forward(self, x: Tensor, lengths: Tensor) -> Tensor:
+        states, _ = self.gru(x)
+        last = states[torch.arange(x.shape[0]), lengths.long() - 1]
+        return torch.tanh(self.out(last))
+
+
+class PhonemeDecoder(nn.Module):
+    """GRU cell from a code to softmax phoneme activity [B, T_a, |B|], closed-loop."""
+
+    def __init__(self, code: int, hidden: int, phonemes: int) -> None:
+        super().__init__()
+        self.init = nn.Linear(code, hidden)
+        self.cell = nn.GRUCell(phonemes, hidden)
+        self.out = nn.Linear(hidden, phonemes)
+        self.phonemes = phonemes
+
+    def forward(self, code: Tensor, steps: int, teacher: Tensor | None = None, alpha: float = 0.0) -> Tensor:
+        h = torch.tanh(self.init(code))
+        y = torch.softmax(self.out(h), dim=-1)
+        outputs = [y]
+        for t in range(1, steps):
+            x = y if teacher is None or alpha == 0.0 else alpha * teacher[:, t - 1] + (1.0 - alpha) * y
+            h = self.cell(x, h)
+            y = torch.softmax(self.out(h), dim=-1)
+            outputs.append(y)
+        return torch.stack(outputs, dim=1)
+
+
+class PeerModel(nn.Module):
+    """Encoders, fusion, language encoder and decoder; `describe_batch` as the MultiMTRNN's."""
+
+    def __init__(self, config: PeerConfig, generation_steps: int, seed: int = 0) -> None:
+        super().__init__()
+        c = config
+        self.config, self.generation_steps = config, generation_steps
+        with torch.random.fork_rng():  # seeded initialisation without touching the global generator
+            torch.manual_seed(seed)
+            self.somatosensory = SequenceEncoder(c.proprioception, c.hidden, c.code)
+            self.visual = SequenceEncoder(c.vision, c.hidden, c.code)
+            self.fusion = nn.Linear(2 * c.code, c.code)
+            self.language = SequenceEncoder(c.phonemes, c.hidden, c.code)
+            self.decoder = PhonemeDecoder(c.code, c.hidden, c.phonemes)
+
+    def perceive(
+        self, prop: Tensor, prop_len: Tensor, vis: Tensor, vis_len: Tensor
+    ) -> tuple[Tensor, Tensor, Tensor]:
+        code_s = self.somatosensory(prop, prop_len)
+        code_v = self.visual(vis, vis_len)
+        return code_s, code_v, torch.tanh(self.fusion(torch.cat([code_s, code_v], dim=-1)))
+
+    @torch.no_grad()
+    def describe_batch(
+        self, proprioception: Sequence[np.ndarray], vision: Sequence[np.ndarray], lexicon: Lexicon
+    ) -> list[Description]:
+        prop, prop_len = pad_sequences(proprioception, self.config.proprioception)
+        vis, vis_len = pad_sequences(vision, self.config.vision)
+        code_s, code_v, z = self.perceive(prop, prop_len, vis, vis_len)
+        activity = self.decoder(z, self.generation_steps).numpy()
+        out = []
+        for i in range(len(activity)):
+            phonemes, words, text = decode_text(activity[i], lexicon)
+            out.append(
+                Description(
+                    text, words, phonemes, activity[i], code_s[i].numpy(), code_v[i].numpy(), z[i].numpy()
+                )
+            )
+        return out
+
+    def describe(self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon) -> Description:
+        return self.describe_batch([proprioception], [vision], lexicon)[0]
+
+
+def _kld(target: Tensor, output: Tensor, eps: float = 1e-8) -> Tensor:
+    """KL divergence of softmax activity, summed over units and steps t >= 1, mean over sequences
+    (the loss of MTRNN_a, `model.mtrnn.kl_divergence`)."""
+    t, o = target[:, 1:], output[:, 1:]
+    return (t * (torch.log(t + eps) - torch.log(o + eps))).sum(dim=(1, 2)).mean()
+
+
+@dataclass
+class TrainedPeer:
+    model: PeerModel
+    history: list[dict]
+    meta: dict
+
+    @property
+    def lexicon(self) -> Lexicon:
+        return Lexicon(self.meta["lexicon"])
+
+
+def train_peer(
+    data: SequenceSet, config: PeerConfig | dict | None = None, seed: int = 0, progress: Any = None
+) -> TrainedPeer:
+    """Full-batch Adam on describe + reconstruct + binding; deterministic for a seed."""
+    from model.training import encode_utterances, generation_steps
+
+    config = PeerConfig.from_dict(config) if isinstance(config, dict) else (config or PeerConfig())
+    steps = generation_steps(data.utterances, config.margin)
+    model = PeerModel(config, steps, seed)
+    prop, prop_len = pad_sequences(data.proprioception, config.proprioception)
+    vis, vis_len = pad_sequences(data.vision, config.vision)
+    target, target_len = encode_utterances(data.utterances, steps)
+    optimiser = torch.optim.Adam(model.parameters(), lr=config.lr)
+    history: list[dict] = []
+    started = time.perf_counter()
+    for epoch in range(1, config.epochs + 1):
+        optimiser.zero_grad()
+        _, _, z = model.perceive(prop, prop_len, vis, vis_len)
+        code_l = model.language(target, target_len)
+        describe = _kld(target, model.decoder(z, steps, target, config.alpha))
+        reconstruct = _kld(target, model.decoder(code_l, steps, target, config.alpha))
+        binding = ((z - code_l) ** 2).sum(dim=1).mean()
+        loss = describe + reconstruct + config.binding * binding
+        loss.backward()
+        optimiser.step()
+        if epoch % max(1, config.progress_every) == 0 or epoch == config.epochs:
+            entry = {
+                "stage": "peer",
+                "epoch": epoch,
+                "epochs": config.epochs,
+                "loss": float(loss.detach()),
+                "describe": float(describe.detach()),
+                "binding": float(binding.detach()),
+            }
+            history.append(entry)
+            if progress is not None:
+                progress({**entry, "csc": z.detach().tolist()})
+    model.eval()
+    meta = {
+        "mode": "peer",
+        "seed": seed,
+        "ids": list(data.ids),
+        "lexicon": list(Lexicon.from_sentences(data.utterances).words),
+        "generation_steps": steps,
+        "peer_config": config.to_dict(),
+        "seconds_total": time.perf_counter() - started,
+    }
+    return TrainedPeer(model, history, meta)
+
+
+def save(model: PeerModel, directory: str | Path, meta: dict) -> Path:
+    """safetensors weights + meta.json (no pickle)."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    save_file(
+        {k: v.detach().contiguous().clone() for k, v in model.state_dict().items()}, str(directory / WEIGHTS)
+    )
+    (directory / META).write_text(json.dumps(meta, indent=2, sort_keys=True, default=float))
+    return directory
+
+
+def load(directory: str | Path) -> tuple[PeerModel, dict]:
+    directory = Path(directory)
+    meta = json.loads((directory / META).read_text())
+    model = PeerModel(PeerConfig.from_dict(meta["peer_config"]), int(meta["generation_steps"]))
+    model.load_state_dict(load_file(str(directory / WEIGHTS)))
+    model.eval()
+    return model, meta
+
+
+@dataclass
+class PeerRunResult:
+    metrics: dict
+    model: PeerModel
+    seconds: float
+    meta: dict
+
+
+def run_once(
+    data: SequenceSet,
+    mode: str,
+    fold: int,
+    seed: int,
+    config: PeerConfig | dict | None = None,
+    out_dir: str | Path | None = None,
+    progress: Any = None,
+) -> PeerRunResult:
+    """`model.evaluation.run_once` for the peer: same split, same scoring, same metrics."""
+    from model.evaluation import _mixed, _slot_vocabularies, fold_split, score
+
+    if mode != "peer":
+        raise ValueError(f"model.peer.run_once trains the peer baseline only, not {mode!r}")
+    start = time.perf_counter()
+    train_idx, test_idx = fold_split(data.ids, fold, seed=0)
+    train_set, test_set = data.subset(train_idx), data.subset(test_idx)
+    trained = train_peer(train_set, config, seed, progress)
+    vocab = _slot_vocabularies(data.utterances)
+    metrics = {
+        "train": score(trained.model, train_set, trained.lexicon, vocab),
+        "test": score(trained.model, test_set, trained.lexicon, vocab),
+    }
+    metrics["mixed"] = _mixed(metrics["train"], metrics["test"])
+    seconds = time.perf_counter() - start
+    meta = dict(trained.meta)
+    meta.update(
+        {
+            "fold": fold,
+            "split": {"train": list(train_set.ids), "test": list(test_set.ids)},
+            "metrics": metrics,
+            "seconds_run": seconds,
+        }
+    )
+    if out_dir is not None:
+        save(trained.model, out_dir, meta)
+    logger.info(
+        "peer fold %d seed %d: test exact %.3f F1 %.3f (%.1f s)",
+        fold,
+        seed,
+        metrics["test"]["sentence_exact"],
+        metrics["test"]["f1"],
+        seconds,
+    )
+    return PeerRunResult(metrics, trained.model, seconds, meta)
+
+
+def _train_mode(data: SequenceSet, config: Any, seed: int, progress: Any = None) -> TrainedPeer:
+    """Entry of the training registry: `train(data, mode="peer")` (the MultiMTRNN config is not used;
+    the peer's own sizes are `PeerConfig`'s defaults)."""
+    return train_peer(data, None, seed, progress)
+
+
+def _register() -> None:
+    from model.training import register_mode
+
+    register_mode("peer", _train_mode)
+
+
+_register()

@@ -1,0 +1,162 @@
+"""`mtrnn evaluate`: the paper's protocol (K folds x N initialisations) on the local cores or Ray.
+
+    mtrnn evaluate --mode end_to_end --folds 4 --inits 2
+    mtrnn evaluate --mode faithful --folds 2 --inits 1 --engine ray --set training.epochs_auditory=50
+    mtrnn evaluate --mode peer --folds 10 --inits 10 --engine ray --address ray://head:10001 --json
+
+Results go to the run store in --run-dir (default $MTRNN_RUN_DIR or ./runs); running the same
+command again skips every finished run, so a killed evaluation is resumed by repeating it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+
+def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options shared by `evaluate` and `sweep`."""
+    parser.add_argument("--folds", type=int, default=10, help="K: 50:50 scene splits (paper: 10)")
+    parser.add_argument("--inits", type=int, default=10, help="N: initialisations per fold (paper: 10)")
+    parser.add_argument("--engine", choices=("local", "ray"), default="local")
+    parser.add_argument("--address", default=None, help="Ray cluster address; none starts a local instance")
+    parser.add_argument(
+        "--workers", type=int, default=2, help="local processes / CPUs of a local Ray instance"
+    )
+    parser.add_argument("--run-dir", type=Path, default=None, help="run store folder (default: ./runs)")
+    parser.add_argument("--seed", type=int, default=0, help="base seed; run (k, n) uses seed + 1000 k + n")
+    parser.add_argument("--corpus", type=Path, default=None, help="encoded corpus (default: the shipped one)")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a config value, e.g. training.epochs_auditory=200 (repeatable)",
+    )
+    parser.add_argument("--json", action="store_true", help="print the summary and every run as JSON")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("evaluate", help="K folds x N inits of one training mode (resumable)")
+    parser.add_argument("--mode", required=True, help="faithful, end_to_end or peer")
+    add_engine_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def parse_overrides(items: list[str]) -> dict[str, Any]:
+    """["training.psi_s=5e-4", ...] -> {"training.psi_s": 0.0005}; values are JSON where they parse."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, raw = item.partition("=")
+        if not sep:
+            raise SystemExit(f"error: --set needs KEY=VALUE, got {item!r}")
+        try:
+            out[key] = json.loads(raw)
+        except json.JSONDecodeError:
+            out[key] = raw
+    return out
+
+
+def load_data(corpus_path: Path | None) -> Any:
+    """The whole encoded corpus as a SequenceSet (folds split it by scene inside each run)."""
+    from data.corpus import load_corpus
+
+    return load_corpus(corpus_path).training_data()
+
+
+def build_config(overrides: dict[str, Any], mode: str = "faithful") -> dict[str, Any]:
+    from model.protocol import apply_overrides, default_config
+
+    try:
+        return apply_overrides(default_config(mode), overrides)
+    except KeyError as err:
+        raise SystemExit(f"error: {err.args[0]}") from None
+
+
+def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
+    bar = tqdm(total=total, initial=already, unit="run", file=sys.stderr)
+
+    def update(event: dict) -> None:
+        bar.update(1)
+        test = event["metrics"].get("test", {})
+        if "f1" in test:
+            bar.set_postfix(test_f1=f"{test['f1']:.3f}", s=f"{event['seconds']:.0f}")
+
+    return bar, update
+
+
+def run(args: argparse.Namespace) -> int:
+    from model.protocol import data_digest, default_run_dir, plan, run_protocol, runner_for, summarise
+    from model.runstore import RunStore
+
+    config = build_config(parse_overrides(args.overrides), args.mode)
+    data = load_data(args.corpus)
+    store = RunStore(args.run_dir or default_run_dir())
+    specs = plan("evaluate", args.mode, args.folds, args.inits, config, data_digest(data), args.seed)
+    already = len(store.done_keys([s.key for s in specs]))
+    bar, update = progress_bar(len(specs), already)
+    try:
+        result = run_protocol(
+            data,
+            specs,
+            store,
+            args.engine,
+            args.workers,
+            args.address,
+            runner=runner_for(args.mode),
+            progress=update,
+        )
+    finally:
+        bar.close()
+    summary = summarise(result.runs)
+    answer = {
+        "mode": args.mode,
+        "folds": args.folds,
+        "inits": args.inits,
+        "engine": args.engine,
+        "run_dir": str(store.run_dir),
+        "executed": result.executed,
+        "skipped": result.skipped,
+        "failed": len(result.failed),
+        "seconds": result.seconds,
+        "summary": summary,
+        "runs": [
+            {
+                "key": r.key,
+                "fold": r.fold,
+                "init": r.init,
+                "seed": r.seed,
+                "seconds": r.seconds,
+                "metrics": r.metrics,
+            }
+            for r in result.runs
+        ],
+    }
+    if args.json:
+        print(json.dumps(answer, indent=1, sort_keys=True))
+    else:
+        print_summary(answer)
+    return 1 if result.failed else 0
+
+
+def print_summary(answer: dict) -> None:
+    print(
+        f"{answer['mode']}: {len(answer['runs'])} runs ({answer['executed']} trained now, "
+        f"{answer['skipped']} "
+        f"from the store, {answer['failed']} failed) in {answer['seconds']:.0f} s; store {answer['run_dir']}"
+    )
+    names = ("sentence_exact", "f1", "edit_distance", "word_accuracy")
+    print(f"{'split':<6} " + " ".join(f"{n:>22}" for n in names))
+    for split in ("train", "test", "mixed"):
+        values = answer["summary"].get(split, {})
+        cells = []
+        for n in names:
+            v = values.get(n)
+            cells.append(f"{v['mean']:.3f} +- {v['sem']:.3f} (max {v['max']:.3f})" if v else "-")
+        print(f"{split:<6} " + " ".join(f"{c:>22}" for c in cells))

@@ -1,0 +1,164 @@
+"""The `end_to_end` training mode: word slots, word-unit cell assemblies, folded input
+normalisation, held-out calibration and a whole (tiny) training that checkpoints faithfully."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from data.scenario import all_scenes
+from model import checkpoint
+from model.config import MTRNNConfig
+from model.end_to_end import (
+    EndToEndOptions,
+    InputNormaliser,
+    WordAssemblies,
+    WordSlots,
+    calibrate,
+    reading_points,
+    selection_split,
+    train_end_to_end,
+)
+from model.multimtrnn import ASSEMBLIES
+from model.training import prepare, train
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
+
+GRAMMAR = [s.utterance for s in all_scenes()]
+
+
+def test_word_slots_are_read_off_the_heard_utterances() -> None:
+    slots = WordSlots.from_utterances(GRAMMAR)
+    assert slots.slots == (
+        ("pull", "push", "show me", "slide"),  # "show" and "me" are always heard together
+        ("blue", "green", "red", "yellow"),  # "the" is heard every time: no slot
+        ("apple", "banana", "dice", "phone"),
+    )
+    assert slots.indices("show me the red apple.") == [2, 2, 0]
+    p = slots.one_hot(["slide the yellow phone.", "pull the blue apple."])
+    assert p.tolist() == [
+        [0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1],
+        [1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0],
+    ]
+
+
+def test_word_slots_reject_sentences_of_different_structure() -> None:
+    with pytest.raises(ValueError, match="informative phrases"):
+        WordSlots.from_utterances(["pull the red apple.", "push the apple.", "slide the blue dice."])
+
+
+def test_reading_points_span_from_start_fraction_to_last_step() -> None:
+    steps = reading_points(torch.tensor([10, 20]), points=3, start=0.3)
+    assert steps.tolist() == [[2, 6, 9], [5, 12, 19]]
+    assert reading_points(torch.tensor([7]), points=1, start=0.3).tolist() == [[6]]
+
+
+def test_folded_normalisation_reads_raw_inputs_exactly_as_trained() -> None:
+    torch.manual_seed(0)
+    cfg = MTRNNConfig(io=5, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=50)
+    net = MTRNN_with_seed(cfg, 1)
+    x = torch.rand(3, 9, 5) * 0.2 + 0.4
+    lengths = torch.tensor([9, 7, 5])
+    normaliser = InputNormaliser.fit(x, lengths)
+    trained_view = net.abstract(normaliser(x), lengths)
+    normaliser.fold_into(net)
+    assert torch.allclose(net.abstract(x, lengths), trained_view, atol=1e-5)
+
+
+def MTRNN_with_seed(cfg: MTRNNConfig, seed: int):  # noqa: N802 - reads like the class it builds
+    from model.mtrnn import MTRNN
+
+    return MTRNN(cfg, torch.Generator().manual_seed(seed))
+
+
+def test_word_assemblies_pick_one_word_per_slot_and_rebuild_from_kwargs() -> None:
+    slots = WordSlots.from_utterances(GRAMMAR)
+    cas = WordAssemblies(12, 12, 12, [list(s) for s in slots.slots], seed=3)
+    c_s, c_v = torch.randn(5, 12), torch.randn(5, 12)
+    p = cas.word_activity(cas.word_logits(c_s, c_v), hard=True)
+    assert p.shape == (5, 12)
+    assert all(torch.equal(part.sum(dim=1), torch.ones(5)) for part in p.split([4, 4, 4], dim=1))
+    assert torch.allclose(cas(c_s, c_v), cas.speak(p))  # c_a,0 = E p + e with the winners
+    rebuilt = ASSEMBLIES[cas.kind](**cas.init_kwargs())
+    rebuilt.load_state_dict(cas.state_dict())
+    assert torch.equal(rebuilt(c_s, c_v), cas(c_s, c_v))
+    assert cas.words[6] == "red"
+
+
+def test_logistic_word_units_threshold_at_one_half() -> None:
+    cas = WordAssemblies(2, 2, 3, [["a", "b"], ["c"]], slot_softmax=False)
+    z = torch.tensor([[2.0, -1.0, 0.5]])
+    assert cas.word_activity(z, hard=True).tolist() == [[1.0, 0.0, 1.0]]
+
+
+def test_calibration_trusts_the_informative_encoder_only() -> None:
+    rng = torch.Generator().manual_seed(0)
+    cas = WordAssemblies(2, 2, 3, [["a", "b", "c"]])
+    heard = torch.nn.functional.one_hot(torch.arange(60) % 3, 3).float()
+    z_informative = 4.0 * heard + 0.5 * torch.randn(60, 3, generator=rng)
+    z_confident_noise = (
+        6.0 * torch.nn.functional.one_hot(torch.randint(0, 3, (60,), generator=rng), 3).float()
+    )
+    g_s, g_v, accuracy = calibrate(cas, z_informative, z_confident_noise, heard)
+    assert accuracy == 1.0
+    assert g_s[0] > 0.5
+    assert g_v[0] < 0.1 * g_s[0]
+
+
+def test_selection_holds_out_whole_scenes_and_keeps_every_word() -> None:
+    data = tiny_corpus(variants=2)
+    slots = WordSlots.from_utterances(data.utterances)
+    fit, held = selection_split(data, slots, scenes=3, seed=0)
+    assert sorted(fit + held) == list(range(len(data)))
+    held_scenes = {data.ids[i].rsplit("-", 1)[0] for i in held}
+    fit_scenes = {data.ids[i].rsplit("-", 1)[0] for i in fit}
+    assert 0 < len(held_scenes) <= 3 and not held_scenes & fit_scenes
+    fit_words = [slots.indices(data.utterances[i]) for i in fit]
+    for k, slot in enumerate(slots.slots):
+        assert {w[k] for w in fit_words} == set(range(len(slot)))
+
+
+def _tiny_options() -> EndToEndOptions:
+    return EndToEndOptions(auditory_epochs=4, perception_epochs=4, select_every=2, selection_scenes=2)
+
+
+def test_training_records_options_and_describes_through_the_model_path(tmp_path) -> None:
+    data = tiny_corpus(variants=2)
+    config = prepare(data, tiny_config())
+    trained = train_end_to_end(data, config, seed=1, options=_tiny_options())
+    assert trained.meta["mode"] == "end_to_end"
+    assert trained.meta["end_to_end"]["word_points"] == 8
+    assert trained.meta["selection"]["epoch"] in (2, 4)
+    assert trained.model.config.visual.io == 21  # the centroid option
+    assert {h["stage"] for h in trained.history} == {"auditory", "perception"}
+    lexicon = trained.lexicon
+    before = trained.model.describe_batch(data.proprioception[:3], data.vision[:3], lexicon)
+    checkpoint.save(trained.model, tmp_path / "m", trained.meta)
+    model, meta = checkpoint.load(tmp_path / "m")
+    after = model.describe_batch(data.proprioception[:3], data.vision[:3], lexicon)
+    assert meta["end_to_end"] == trained.meta["end_to_end"]
+    for b, a in zip(before, after, strict=True):
+        assert b.text == a.text
+        np.testing.assert_array_equal(b.activity, a.activity)
+
+
+def test_mode_is_registered_and_deterministic() -> None:
+    data = tiny_corpus(variants=1)
+    config = tiny_config(epochs=2)
+    a = train(data, mode="end_to_end", config=config, seed=5)
+    b = train(data, mode="end_to_end", config=config, seed=5)
+    for (name, x), (_, y) in zip(a.model.state_dict().items(), b.model.state_dict().items(), strict=True):
+        assert torch.equal(x, y), name
+
+
+def test_plain_end_to_end_trains_everything_through_the_auditory_loss() -> None:
+    data = tiny_corpus(variants=1)
+    config = prepare(data, tiny_config())
+    options = EndToEndOptions(word_loss=False, joint_epochs=3, hard_words=False)
+    model = train_end_to_end(data, config, seed=0, options=options).model
+    initial = train_end_to_end(
+        data, prepare(data, tiny_config()), seed=0, options=EndToEndOptions(word_loss=False, joint_epochs=0)
+    ).model
+    for net in ("somatosensory", "visual", "auditory"):
+        assert not torch.equal(getattr(model, net).weight, getattr(initial, net).weight), net
+    assert not torch.equal(model.assemblies.projection, initial.assemblies.projection)

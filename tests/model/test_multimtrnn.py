@@ -1,0 +1,92 @@
+"""MultiMTRNN (eqs. 16-17): abstraction of perception, cell assemblies, description of a scene."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from tiny_corpus import tiny_config, tiny_corpus
+
+from model.encoding.utterance import PHONEMES, Lexicon
+from model.mtrnn import scaled_logistic
+from model.multimtrnn import ASSEMBLIES, CellAssemblies, Description, MultiMTRNN, pad_sequences
+
+
+@pytest.fixture(scope="module")
+def model() -> MultiMTRNN:
+    config = tiny_config()
+    config.generation_steps = 40
+    return MultiMTRNN(config, seed=0)
+
+
+@pytest.fixture(scope="module")
+def lexicon() -> Lexicon:
+    return Lexicon.from_sentences(tiny_corpus().utterances)
+
+
+def test_cell_assemblies_are_eq17_on_the_activity_of_the_perception_csc():
+    ca = CellAssemblies(csc_s=2, csc_v=3, csc_a=4, seed=1)
+    c_s, c_v = torch.randn(5, 2), torch.randn(5, 3)
+    w, b = ca.weight.detach(), ca.bias.detach()
+    expected = scaled_logistic(c_s) @ w[:, :2].T + scaled_logistic(c_v) @ w[:, 2:].T + b
+    assert torch.allclose(ca(c_s, c_v), expected, atol=1e-6)
+    assert ASSEMBLIES["linear"] is CellAssemblies
+    assert CellAssemblies(**ca.init_kwargs()).weight.equal(ca.weight)
+
+
+def test_padding_after_a_sequence_does_not_change_its_abstraction(model):
+    data = tiny_corpus()
+    c_s, c_v = model.abstract(data.proprioception[:3], data.vision[:3])
+    alone = [model.abstract([p], [v]) for p, v in zip(data.proprioception[:3], data.vision[:3], strict=True)]
+    assert torch.allclose(c_s, torch.cat([a[0] for a in alone]), atol=1e-6)
+    assert torch.allclose(c_v, torch.cat([a[1] for a in alone]), atol=1e-6)
+    assert c_s.shape == (3, model.config.somatosensory.csc) and c_v.shape == (3, model.config.visual.csc)
+
+
+def test_vision_uses_only_the_configured_feature_columns(model):
+    data = tiny_corpus()
+    v21 = data.vision[0]
+    v19 = v21[:, :19]
+    changed = v21.copy()
+    changed[:, 19:] = 123.0  # the centroid columns
+    assert torch.equal(
+        model.abstract([data.proprioception[0]], [v19])[1],
+        model.abstract([data.proprioception[0]], [changed])[1],
+    )
+    padded, lengths = pad_sequences([v21, v21[:5]], 19)
+    assert padded.shape == (2, len(v21), 19) and lengths.tolist() == [len(v21), 5]
+    with pytest.raises(ValueError, match="features"):
+        pad_sequences([v21[:, :10]], 19)
+
+
+def test_describe_returns_text_and_every_csc(model, lexicon):
+    data = tiny_corpus()
+    d = model.describe(data.proprioception[0], data.vision[0], lexicon)
+    assert isinstance(d, Description)
+    assert d.activity.shape == (40, len(PHONEMES))
+    assert np.allclose(d.activity.sum(axis=1), 1.0, atol=1e-5)
+    assert d.csc_s.shape == (2,) and d.csc_v.shape == (2,) and d.csc_a.shape == (3,)  # ceil(|Cs| / 2)
+    assert isinstance(d.text, str) and all(w in lexicon.words or w in ".!?" for w in d.words)
+    batch = model.describe_batch(data.proprioception[:2], data.vision[:2], lexicon)
+    assert np.allclose(batch[0].activity, d.activity, atol=1e-6) and batch[0].text == d.text
+
+
+def test_generate_from_csc_is_the_generator_alone(model, lexicon):
+    data = tiny_corpus()
+    d = model.describe(data.proprioception[0], data.vision[0], lexicon)
+    again = model.generate_from_csc(d.csc_a, lexicon)
+    assert np.allclose(again.activity, d.activity, atol=1e-6) and again.csc_s is None
+    with pytest.raises(ValueError, match="values"):
+        model.generate_from_csc([0.0, 1.0], lexicon)
+
+
+def test_activity_trace_covers_every_layer_of_the_three_nets(model, lexicon):
+    data = tiny_corpus()
+    p, v = data.proprioception[0], data.vision[0]
+    trace = model.activity_trace(p, v, lexicon)
+    assert trace.somatosensory.io.shape == (len(p), 5) and trace.somatosensory.cf.shape == (len(p), 6)
+    assert trace.visual.cs.shape == (len(v), 4) and trace.visual.csc.shape == (len(v), 2)
+    assert trace.auditory.io.shape == (40, len(PHONEMES)) and trace.auditory.csc.shape == (40, 3)
+    assert np.allclose(trace.somatosensory.csc[-1], trace.description.csc_s, atol=1e-6)
+    assert np.allclose(trace.auditory.csc[0], trace.description.csc_a, atol=1e-6)
+    assert np.allclose(trace.auditory.io, trace.description.activity, atol=1e-6)

@@ -1,0 +1,179 @@
+"""The evaluation engine: seeds, plans, resumability, and equal numbers on the local pool and Ray."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+from tiny_data import TINY_OVERRIDES, tiny_sequence_set
+
+from model.protocol import (
+    apply_overrides,
+    data_digest,
+    default_config,
+    execute_run,
+    plan,
+    run_protocol,
+    run_seed,
+    summarise,
+)
+from model.runstore import RunStore
+
+HERE = Path(__file__).resolve().parent
+
+
+def tiny_config() -> dict:
+    return apply_overrides(default_config(), TINY_OVERRIDES)
+
+
+def test_every_fold_and_init_gets_its_own_reproducible_seed() -> None:
+    seeds = {run_seed(0, k, n) for k in range(10) for n in range(10)}
+    assert len(seeds) == 100
+    assert run_seed(7, 3, 4) == 7 + 3000 + 4
+
+
+def test_plan_gives_k_times_n_runs_with_distinct_keys() -> None:
+    data = tiny_sequence_set()
+    specs = plan("evaluate", "faithful", 3, 2, tiny_config(), data_digest(data))
+    assert [(s.fold, s.init) for s in specs] == [(k, n) for k in range(3) for n in range(2)]
+    assert len({s.key for s in specs}) == 6
+    assert [s.key for s in specs] == [
+        s.key for s in plan("evaluate", "faithful", 3, 2, tiny_config(), data_digest(data))
+    ]
+
+
+def test_overrides_set_nested_values_and_reject_unknown_keys() -> None:
+    cfg = apply_overrides(default_config(), {"training.psi_s": 1e-3})
+    assert cfg["training"]["psi_s"] == 1e-3 and default_config()["training"]["psi_s"] == 5e-4
+    with pytest.raises(KeyError, match="training.no_such"):
+        apply_overrides(default_config(), {"training.no_such": 1})
+
+
+def test_data_digest_changes_with_the_data() -> None:
+    data = tiny_sequence_set()
+    other = tiny_sequence_set()
+    other.vision[0] = other.vision[0] + 1e-3
+    assert data_digest(data) == data_digest(tiny_sequence_set()) != data_digest(other)
+
+
+def test_a_worker_returns_metrics_per_split_and_the_checkpoint_files() -> None:
+    data = tiny_sequence_set()
+    (spec,) = plan("evaluate", "faithful", 1, 1, tiny_config(), data_digest(data))
+    outcome = execute_run(data, spec)
+    assert outcome.ok, outcome.error
+    assert set(outcome.metrics) == {"train", "test", "mixed"}
+    assert 0.0 <= outcome.metrics["test"]["f1"] <= 1.0
+    assert outcome.metrics["train"]["n"] == outcome.metrics["test"]["n"] == 8
+    assert "csc.somatosensory.d_rel" in outcome.metrics["train"]
+    assert {"meta.json", "model.safetensors"} <= set(outcome.checkpoint)
+    again = execute_run(data, spec)
+    assert again.metrics == outcome.metrics  # deterministic for a seed
+
+
+def test_a_failing_run_is_reported_not_raised() -> None:
+    data = tiny_sequence_set()
+    (spec,) = plan("evaluate", "no_such_mode", 1, 1, tiny_config(), data_digest(data))
+    outcome = execute_run(data, spec)
+    assert not outcome.ok and "no_such_mode" in outcome.error
+
+
+@pytest.mark.slow
+def test_local_pool_runs_everything_once_and_a_rerun_skips_it(tmp_path) -> None:
+    data = tiny_sequence_set()
+    specs = plan("evaluate", "faithful", 2, 1, tiny_config(), data_digest(data))
+    store = RunStore(tmp_path)
+    first = run_protocol(data, specs, store, "local", workers=2)
+    assert first.executed == 2 and first.skipped == 0 and not first.failed
+    assert [(r.fold, r.init) for r in first.runs] == [(0, 0), (1, 0)]
+    assert all(Path(r.checkpoint, "meta.json").is_file() for r in first.runs)
+    second = run_protocol(data, specs, store, "local", workers=2)
+    assert second.executed == 0 and second.skipped == 2
+    assert [r.metrics for r in second.runs] == [r.metrics for r in first.runs]
+    summary = summarise(first.runs)
+    assert summary["test"]["f1"]["n"] == 2
+
+
+@pytest.mark.cluster
+def test_ray_gives_the_same_numbers_as_the_local_pool(tmp_path) -> None:
+    """The CI check of issue 5: 2 folds x 1 init on a local Ray instance == the local engine."""
+    ray = pytest.importorskip("ray")
+    data = tiny_sequence_set()
+    specs = plan("evaluate", "faithful", 2, 1, tiny_config(), data_digest(data))
+    local = run_protocol(data, specs, RunStore(tmp_path / "local"), "local", workers=2)
+    try:
+        remote = run_protocol(data, specs, RunStore(tmp_path / "ray"), "ray", workers=2)
+    finally:
+        ray.shutdown()
+    assert not local.failed and not remote.failed
+    assert [r.key for r in local.runs] == [r.key for r in remote.runs]
+    for a, b in zip(local.runs, remote.runs, strict=True):
+        assert a.metrics == b.metrics  # exactly equal, every split, every measure
+
+
+DRIVER = textwrap.dedent(
+    """
+    import sys
+    sys.path.insert(0, {here!r})
+    from tiny_data import tiny_sequence_set
+    from model.protocol import apply_overrides, data_digest, default_config, plan, run_protocol
+    from model.runstore import RunStore
+
+    if __name__ == "__main__":
+        data = tiny_sequence_set()
+        overrides = {{"training.epochs_auditory": 60, "training.epochs_somatosensory": 30,
+                     "training.epochs_visual": 30, "training.epochs_assemblies": 30}}
+        config = apply_overrides(default_config(), overrides)
+        specs = plan("evaluate", "faithful", 3, 2, config, data_digest(data))
+        run_protocol(data, specs, RunStore(sys.argv[1]), "local", workers=2)
+    """
+)
+
+
+def _done(db: Path) -> dict[str, tuple[float, int]]:
+    if not db.exists():
+        return {}
+    try:
+        with sqlite3.connect(db, timeout=30) as con:
+            rows = con.execute("SELECT key, finished, attempts FROM runs WHERE status = 'done'").fetchall()
+    except sqlite3.OperationalError:  # the store is being created
+        return {}
+    return {k: (f, a) for k, f, a in rows}
+
+
+@pytest.mark.slow
+def test_an_evaluation_killed_midway_finishes_on_restart_with_every_run_exactly_once(tmp_path) -> None:
+    script = tmp_path / "driver.py"
+    script.write_text(DRIVER.format(here=str(HERE)))
+    run_dir = tmp_path / "runs"
+    db = run_dir / "runs.sqlite"
+    proc = subprocess.Popen([sys.executable, str(script), str(run_dir)], start_new_session=True)
+    deadline = time.monotonic() + 240
+    while len(_done(db)) < 2:
+        assert proc.poll() is None, "the evaluation ended before it could be killed"
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    before = _done(db)
+    assert 2 <= len(before) < 6, "kill midway: some runs done, some not"
+
+    subprocess.run([sys.executable, str(script), str(run_dir)], check=True, timeout=300)
+
+    after = _done(db)
+    assert len(after) == 6
+    with sqlite3.connect(db) as con:
+        assert con.execute("SELECT COUNT(*) FROM runs").fetchone()[0] == 6
+        per_run = con.execute(
+            "SELECT run_key, COUNT(*) FROM metrics WHERE name = 'f1' GROUP BY run_key"
+        ).fetchall()
+    assert sorted(n for _, n in per_run) == [3] * 6  # train, test, mixed: once each
+    for key, (finished, attempts) in before.items():
+        assert after[key] == (finished, attempts) and attempts == 1  # not trained again
+    assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == sorted(after)

@@ -1,0 +1,53 @@
+"""Fixtures of the API tests: one app on the real corpus code and real (untrained) models."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from explorer_artefacts import build_artefacts
+from fastapi.testclient import TestClient
+
+from data.corpus import export_recording, load_corpus
+from data.recording import write_npz, write_zip
+from server.app import create_app
+from server.settings import Settings
+
+
+@pytest.fixture(scope="session")
+def settings(tmp_path_factory: pytest.TempPathFactory) -> Settings:
+    return build_artefacts(tmp_path_factory.mktemp("explorer"))
+
+
+@pytest.fixture(scope="session")
+def client(settings: Settings) -> Iterator[TestClient]:
+    with TestClient(create_app(settings)) as c:
+        yield c
+
+
+@dataclass(frozen=True)
+class Exported:
+    id: str
+    zip: Path
+    npz: Path
+
+
+@pytest.fixture(scope="session")
+def exported(settings: Settings, tmp_path_factory: pytest.TempPathFactory) -> Exported:
+    """A corpus recording exported in format v1, as .zip and as .npz (what users upload)."""
+    rid = load_corpus(settings.corpus_path).entries[0].id
+    rec = export_recording(rid, 0)
+    out = tmp_path_factory.mktemp("uploads")
+    return Exported(rid, write_zip(rec, out / f"{rid}.zip"), write_npz(rec, out / f"{rid}.npz"))
+
+
+def zip_bytes(members: dict[str, bytes]) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    return buf.getvalue()

@@ -1,0 +1,276 @@
+"""The lessons in Debian chromium (Playwright): each lesson loads, every live control is moved and
+the view changes with numbers or plots from the server; ?hide= hides controls; answers reveal.
+
+By default the app runs in-process on the synthetic world of tests/server/lesson_world.py. With
+MTRNN_LESSONS_URL=http://host:port the test drives that running app instead (e.g. `mtrnn serve` on
+the shipped model), and with MTRNN_LESSON_SCREENSHOTS=<dir> it saves one screenshot per lesson.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import cv2
+import pytest
+import uvicorn
+
+from data.scenario import Scene
+from server.app import create_app
+from tests.server.lesson_world import build, make_state_factory, render
+
+pytestmark = pytest.mark.browser
+playwright = pytest.importorskip("playwright.sync_api")
+CHROMIUM = "/usr/bin/chromium"
+SHOTS = os.environ.get("MTRNN_LESSON_SCREENSHOTS")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def base_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    external = os.environ.get("MTRNN_LESSONS_URL")
+    if external:
+        yield external.rstrip("/")
+        return
+    settings = dataclasses.replace(build(tmp_path_factory.mktemp("world")), viser=True)
+    app = create_app(settings, make_state_factory(settings))
+    port = _free_port()
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 60
+    while not server.started:
+        if time.monotonic() > deadline:
+            raise RuntimeError("the app did not start")
+        time.sleep(0.1)
+    # create the lessons' store and keep the live cosine run short for the test
+    import httpx
+
+    httpx.get(f"http://127.0.0.1:{port}/api/lessons", timeout=60)
+    app.state.lessons.cosine.max_epochs = 60
+    yield f"http://127.0.0.1:{port}"
+    server.should_exit = True
+    thread.join(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator:
+    if not Path(CHROMIUM).exists():
+        pytest.skip("Debian chromium is not installed")
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(
+            executable_path=CHROMIUM,
+            args=["--no-sandbox", "--enable-unsafe-swiftshader", "--disable-background-networking"],
+        )
+        yield b
+        b.close()
+
+
+@pytest.fixture()
+def page(browser, base_url: str) -> Iterator:  # noqa: ANN001 - a Playwright browser
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    pg = context.new_page()
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.base = base_url  # type: ignore[attr-defined]
+    yield pg
+    context.close()
+    assert not errors, errors
+
+
+def _open(page, lesson: str, query: str = "") -> None:  # noqa: ANN001
+    page.goto(f"{page.base}/lessons/#/lessons?lesson={lesson}{query}")
+    page.wait_for_selector(f"#lesson-{lesson}")
+
+
+def _changes(page, read: Callable[[], object], act: Callable[[], None], timeout: float = 30.0) -> object:  # noqa: ANN001
+    """Do `act` and wait until `read()` differs from before; return the new value."""
+    before = read()
+    act()
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        now = read()
+        if now != before:
+            return now
+        page.wait_for_timeout(100)
+    raise AssertionError(f"the view did not change (still {before!r})")
+
+
+def _slide(page, selector: str, value: float) -> None:  # noqa: ANN001
+    page.eval_on_selector(
+        selector,
+        "(el, v) => { el.value = v; el.dispatchEvent(new Event('input', { bubbles: true })); }",
+        value,
+    )
+
+
+def _plot(page, el_id: str, path: str = "data") -> Callable[[], str]:  # noqa: ANN001
+    """Reads a Plotly figure's data (or layout) as JSON: a plot that changed was redrawn."""
+    return lambda: page.evaluate(
+        f"() => {{ const d = document.getElementById('{el_id}'); return d && d.{path} ? JSON.stringify(d.{path}) : ''; }}"
+    )
+
+
+def _text(page, selector: str) -> Callable[[], str]:  # noqa: ANN001
+    return lambda: (
+        page.eval_on_selector(selector, "el => el.textContent") if page.query_selector(selector) else ""
+    )
+
+
+def _shot(page, lesson: str) -> None:  # noqa: ANN001
+    if SHOTS:
+        page.wait_for_timeout(800)
+        Path(SHOTS).mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(Path(SHOTS) / f"{lesson}.png"), full_page=True)
+
+
+def _reveal(page) -> None:  # noqa: ANN001
+    page.click("button.reveal")
+    page.wait_for_selector(".try .answer:not([hidden])")
+    assert len(page.inner_text(".try .answer")) > 80
+
+
+def test_timescales_tau_scene_and_the_shared_time_cursor(page) -> None:  # noqa: ANN001
+    _open(page, "timescales")
+    page.wait_for_selector("#half-life")
+    page.wait_for_function("() => document.getElementById('layer-Cs').data")
+    half = _changes(page, _text(page, "#half-life"), lambda: _slide(page, "#tau", 70))
+    assert "48" in str(half)  # ln 0.5 / ln(1 - 1/70) = 48.2 steps, from the server
+    assert "tau=70" in page.url
+    _changes(page, _plot(page, "layer-Cs"), lambda: page.select_option("#scene", index=5))
+    cursor = _plot(page, "layer-IO", "layout.shapes")
+    _changes(page, cursor, lambda: _slide(page, "#time", 20))
+    assert page.evaluate("() => document.getElementById('layer-Cf').layout.shapes[0].x0") == 20
+    _reveal(page)
+    _shot(page, "timescales")
+
+
+def test_speaking_text_and_the_four_constants(page) -> None:  # noqa: ANN001
+    _open(page, "speaking")
+    page.wait_for_selector("#arpabet")
+    _changes(page, _text(page, "#arpabet"), lambda: page.fill("#utterance", "the bookkeeper."))
+    page.wait_for_function("() => document.getElementById('exact').textContent.includes('exact')")
+    assert "✓" in page.inner_text("#exact")
+    _changes(page, _text(page, "#exact"), lambda: _slide(page, "#nu", 1))
+    assert "✗" in page.inner_text("#exact")
+    _slide(page, "#nu", 2)
+    page.wait_for_function("() => document.getElementById('exact').textContent.includes('✓')")
+    _changes(page, _plot(page, "softmax-plot"), lambda: _slide(page, "#sigma2", 2))
+    _changes(page, _plot(page, "spike-plot"), lambda: _slide(page, "#omega", 8))
+    _changes(page, _plot(page, "softmax-plot"), lambda: _slide(page, "#gamma", 0))
+    page.fill("#utterance", "push the florbix.")
+    page.wait_for_selector("#speech-error .error")
+    assert "florbix" in page.inner_text("#speech-error")
+    page.fill("#utterance", "slide the red apple.")
+    page.wait_for_function("() => !document.querySelector('#speech-error .error')")
+    _reveal(page)
+    _shot(page, "speaking")
+
+
+def test_seeing_frames_colour_window_and_an_upload(page, tmp_path: Path) -> None:  # noqa: ANN001
+    _open(page, "seeing")
+    page.wait_for_selector("#stages img")
+    _changes(page, _text(page, "#seeing-source"), lambda: _slide(page, "#frame", 5))
+    assert "frame 5" in page.inner_text("#seeing-source")
+    mean_shift = lambda: page.get_attribute("#stages img[data-stage=mean_shift]", "src")  # noqa: E731
+    _changes(page, mean_shift, lambda: _slide(page, "#colour-radius", 60))
+    _changes(page, _plot(page, "feature-plot"), lambda: page.select_option("#scene", index=7))
+    picture = tmp_path / "mine.png"
+    frame = render(Scene("slide", "yellow", "banana"))[0]
+    cv2.imwrite(str(picture), cv2.cvtColor(frame, cv2.COLOR_RGB2BGR))
+    _changes(page, _text(page, "#seeing-source"), lambda: page.set_input_files("#image-file", str(picture)))
+    assert "mine.png" in page.inner_text("#seeing-source")
+    _reveal(page)
+    _shot(page, "seeing")
+
+
+def test_feeling_action_colour_and_the_cursor_shared_with_the_3d_arm(page) -> None:  # noqa: ANN001
+    _open(page, "feeling")
+    page.wait_for_selector("#touch-distances")
+    page.wait_for_function("() => document.getElementById('joint-plot').data")
+    _changes(page, _plot(page, "joint-plot"), lambda: page.select_option("#action", "slide"))
+    _changes(page, _plot(page, "joint-plot"), lambda: page.select_option("#colour", "blue"))
+    assert "colour=blue" in page.url and "action=slide" in page.url
+    _changes(page, _plot(page, "joint-plot", "layout.shapes"), lambda: _slide(page, "#time", 1.5))
+    viewer = page.evaluate("() => fetch('/api/viewer').then((r) => r.json())")
+    if viewer["available"]:  # the 3D arm follows the page's cursor
+        page.wait_for_function(
+            "() => fetch('/api/viewer').then((r) => r.json()).then((s) => Math.abs(s.t - 1.5) < 0.06)"
+        )
+        shown = page.evaluate("() => fetch('/api/viewer').then((r) => r.json())")["source"]
+        assert shown == page.eval_on_selector("#shown", "el => el.value")
+        page.select_option("#shown", index=2)
+        page.wait_for_function(
+            "(id) => fetch('/api/viewer').then((r) => r.json()).then((s) => s.source === id)",
+            arg=page.eval_on_selector("#shown", "el => el.value"),
+        )
+    _reveal(page)
+    _shot(page, "feeling")
+
+
+def test_abstracting_runs_the_cosine_experiment_live(page) -> None:  # noqa: ANN001
+    _open(page, "abstracting", "&psi=0.0002")
+    page.wait_for_selector("#sweep h2")
+    _changes(page, _text(page, "#psi-value"), lambda: _slide(page, "#psi", 2))
+    page.fill("#seed", "4")
+    page.click("#run")
+    page.wait_for_function(
+        "() => document.getElementById('run-status').textContent.startsWith('done')", timeout=60_000
+    )
+    assert float(page.inner_text("#d-rel")) > 0
+    assert page.evaluate("() => document.getElementById('csc-plot').data.length") >= 6
+    assert page.eval_on_selector("#progress > div", "el => el.style.width") == "100%"
+    assert len(page.query_selector_all("#run-history tr")) == 1
+    _reveal(page)
+    _shot(page, "abstracting")
+
+
+def test_associating_mute_and_colour_by(page) -> None:  # noqa: ANN001
+    _open(page, "associating")
+    page.wait_for_selector("#said-muted")
+    page.wait_for_function("() => document.getElementById('space-a').data")
+    _changes(page, _plot(page, "space-a"), lambda: page.select_option("#mute", "vision"))
+    page.wait_for_selector("#moved")
+    assert float(page.inner_text("#moved")) > 0
+    _changes(page, _plot(page, "space-a"), lambda: page.select_option("#mute", "proprioception"))
+    _changes(page, _plot(page, "space-v"), lambda: page.select_option("#colour-by", "colour"))
+    _changes(page, _plot(page, "space-s"), lambda: page.select_option("#scene", index=9))
+    assert "mute=proprioception" in page.url
+    _reveal(page)
+    _shot(page, "associating")
+
+
+def test_generalising_two_models_side_by_side(page) -> None:  # noqa: ANN001
+    _open(page, "generalising")
+    page.wait_for_selector("#summary-0 table")
+    page.wait_for_selector("#summary-1 table")
+    page.wait_for_function("() => document.getElementById('grid-1').data")
+    options = page.eval_on_selector_all("#model-b option", "els => els.map((e) => e.value)")
+    current = page.eval_on_selector("#model-b", "el => el.value")
+    other = next(o for o in options if o != current)
+    _changes(page, _text(page, "#title-1"), lambda: page.select_option("#model-b", other))
+    assert other in page.inner_text("#title-1") and f"b={other}" in page.url
+    page.click("#grid-0 .nsewdrag", position={"x": 30, "y": 30})
+    page.wait_for_selector("#detail-0 li")
+    _reveal(page)
+    _shot(page, "generalising")
+
+
+def test_hide_flags_remove_controls_and_survive_navigation(page) -> None:  # noqa: ANN001
+    _open(page, "timescales", "&hide=tau,time")
+    page.wait_for_selector("#half-life")
+    assert page.is_hidden("[data-control=tau]") and page.is_hidden("[data-control=time]")
+    assert page.is_visible("[data-control=scene]")
+    page.click("nav.lesson-tabs a[data-lesson=speaking]")
+    page.wait_for_selector("#lesson-speaking")
+    assert "hide=tau%2Ctime" in page.url or "hide=tau,time" in page.url

@@ -1,0 +1,120 @@
+// Lesson 4: feeling. Proprioception of one action on the four objects overlaid, one time cursor
+// shared with the 3D arm (the app's viser view), and why touch alone cannot tell objects apart.
+
+import { get } from "../js/api.js";
+import { h, errorBox } from "../js/dom.js";
+import { Cursor } from "../js/cursor.js";
+import { plotly, CONFIG, baseLayout, cursorShape, SHAPE_COLOURS } from "../js/plots.js";
+import { control, controls, tryThis, latest, slider, select, num } from "./common.js";
+
+const ACTIONS = ["pull", "push", "show me", "slide"];
+const COLOURS = ["blue", "green", "red", "yellow"];
+
+export async function render(root, ctx) {
+  const Plotly = await plotly();
+  const action = select("action", ACTIONS, ACTIONS.includes(ctx.params.action) ? ctx.params.action : "push");
+  const colour = select("colour", COLOURS, COLOURS.includes(ctx.params.colour) ? ctx.params.colour : "red");
+  const shown = select("shown", [], "");
+  const time = slider("time", 0, 1, 0.05, Number(ctx.params.t || 0));
+  const timeValue = h("span", { class: "value time", id: "time-value" }, "0.00 s");
+  const error = h("div", { id: "feeling-error" });
+  const plot = h("div", { class: "plot", id: "joint-plot", style: "height:560px" });
+  const table = h("div", { id: "touch-table" });
+  const viewer = await get("/api/viewer").catch(() => ({ available: false }));
+  const iframe = viewer.available
+    ? h("iframe", { src: "/viser/", class: "viser", title: "3D view of the NAO arm (viser)", id: "viser-frame" })
+    : h("p", { class: "muted" }, "The 3D viewer is not running in this server (started with MTRNN_VISER=0).");
+  const viewerNote = h("p", { class: "muted small", id: "viewer-note" });
+  let data = null;
+  let cursor = null;
+
+  root.append(
+    h("div", { class: "lesson-text" },
+      h("p", {}, "Proprioception is the body's sense of itself: here the five joint angles of the NAO's right arm, 20 times a second, scaled to [0, 1] by the joint limits. It is what MTRNN_s reads. Pick an action and a colour: the plot overlays the same action on the four shapes. The 3D arm replays one of them; the red line is one time cursor shared with it."),
+      h("p", {}, "All the objects have about the same mass and friction (paper 4.1), so the arm moves much the same whatever it is moving. The table below measures it: how different the joint trajectories are, and how far apart the model's abstracted contexts c_s,T (touch) and c_v,T (vision) land.")),
+    controls(
+      control(ctx, "action", "action", action, "The manipulation the teacher guided the arm through (Fig. 5b).", "proprioception"),
+      control(ctx, "colour", "colour", colour, "The colour of the four objects overlaid.", null),
+      control(ctx, "shown", "3D shows", shown, "Which of the four recordings the 3D arm replays.", null),
+      control(ctx, "time", "time", time, "The shared time cursor, in seconds: the red line here and the arm in 3D.", null), timeValue),
+    error,
+    h("div", { class: "grid-plot" }, plot, h("section", { class: "panel" }, h("h2", {}, "3D arm"), iframe, viewerNote)),
+    table,
+    tryThis("Is a push on the red apple closer, for the arm, to a push on the blue phone or to a pull on the red apple? And for the eyes?",
+      () => {
+        if (!data || !data.comparison) return [h("p", {}, "This needs the red apple and the blue phone in the corpus.")];
+        const [same, other] = data.comparison.rows;
+        return [
+          h("p", {}, `For the joints the two objects under the same action differ by ${num(same.joints_rms)} (RMS, joint units in [0, 1]) while the two actions on the same object differ by ${num(other.joints_rms)}; in the somatosensory context c_s,T the distances are ${num(same.c_s)} and ${num(other.c_s)}. For vision it is the other way round: c_v,T distances ${num(same.c_v)} (different object) and ${num(other.c_v)} (same object).`),
+          h("p", {}, "Touch tells the action, not the object; sight tells the object, not the action. Neither sense alone can say “push the red apple”; lesson 6 shows the cell assemblies putting the two halves together."),
+        ];
+      }));
+
+  function drawCursor() {
+    const t = Number(time.value);
+    timeValue.textContent = `${t.toFixed(2)} s`;
+    ctx.setParams({ t: t.toFixed(2) });
+    if (data) Plotly.relayout(plot, { shapes: [0, 1, 2, 3, 4].map((k) => ({ ...cursorShape(t, `y${k ? k + 1 : ""} domain`), xref: `x${k ? k + 1 : ""}` })) });
+  }
+
+  function connectViewer() {
+    if (cursor) cursor.close();
+    const series = data.series.find((s) => s.id === shown.value) || data.series[0];
+    const duration = (series.proprioception[0].length - 1) / series.fps;
+    cursor = new Cursor(series.id, duration, series.fps, (s) => {
+      if (Math.abs(Number(time.value) - s.t) > 1e-3) { time.value = s.t; drawCursor(); }
+    });
+    cursor.connect(Math.min(Number(time.value), duration)).then((live) => {
+      viewerNote.textContent = live ? `replaying ${series.id}; the panel's own play controls move the cursor too` : "the 3D viewer is not running in this server (MTRNN_VISER=0): the cursor is local";
+    });
+  }
+
+  function draw() {
+    const traces = [];
+    data.joint_names.forEach((joint, k) => {
+      data.series.forEach((s) => {
+        const x = s.proprioception[k].map((_, i) => i / s.fps);
+        traces.push({ x, y: s.proprioception[k], xaxis: `x${k ? k + 1 : ""}`, yaxis: `y${k ? k + 1 : ""}`, mode: "lines",
+          name: s.shape, legendgroup: s.shape, showlegend: k === 0, line: { color: SHAPE_COLOURS[s.shape], width: 2 } });
+      });
+    });
+    const layout = baseLayout({ grid: { rows: 5, columns: 1, shared_xaxes: true, pattern: "independent" },
+      legend: { orientation: "h", y: 1.06 }, margin: { l: 110, r: 10, t: 40, b: 40 } });
+    data.joint_names.forEach((joint, k) => {
+      layout[`yaxis${k ? k + 1 : ""}`] = { title: { text: joint, font: { size: 10 } }, range: [0, 1] };
+      layout[`xaxis${k ? k + 1 : ""}`] = { matches: k ? "x" : undefined, showticklabels: k === 4, title: k === 4 ? { text: "time (s)" } : undefined };
+    });
+    Plotly.react(plot, traces, layout, CONFIG);
+    const longest = Math.max(...data.series.map((s) => (s.proprioception[0].length - 1) / s.fps));
+    time.max = longest.toFixed(2);
+    drawCursor();
+    if (!data.comparison) {
+      table.replaceChildren(h("p", { class: "muted" }, "The corpus lacks the red apple or the blue phone for this action."));
+      return;
+    }
+    table.replaceChildren(h("h2", {}, `Why touch alone cannot tell a red apple from a blue phone (model ${data.comparison.model})`),
+      h("table", { class: "lesson-table", id: "touch-distances" },
+        h("thead", {}, h("tr", {}, h("th", {}, "pair"), h("th", {}, "what differs"), h("th", {}, "joints RMS"), h("th", {}, "d(c_s,T) touch"), h("th", {}, "d(c_v,T) vision"))),
+        h("tbody", {}, data.comparison.rows.map((r) => h("tr", {}, h("td", {}, r.pair), h("td", {}, r.what),
+          h("td", { class: "num" }, num(r.joints_rms)), h("td", { class: "num" }, num(r.c_s)), h("td", { class: "num" }, num(r.c_v)))))));
+  }
+
+  const load = latest(async () => {
+    ctx.setParams({ action: action.value, colour: colour.value });
+    try {
+      data = await get(`/api/lessons/feeling?${new URLSearchParams({ action: action.value, colour: colour.value })}`);
+      error.replaceChildren();
+    } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
+    const wanted = ctx.params.shown && data.series.some((s) => s.id === ctx.params.shown) ? ctx.params.shown : data.series[0].id;
+    shown.replaceChildren(...data.series.map((s) => h("option", { value: s.id, selected: s.id === wanted }, s.shape)));
+    draw();
+    connectViewer();
+  });
+
+  action.addEventListener("change", load);
+  colour.addEventListener("change", load);
+  shown.addEventListener("change", () => { ctx.setParams({ shown: shown.value }); connectViewer(); });
+  time.addEventListener("input", () => { drawCursor(); if (cursor) cursor.seek(Number(time.value)); });
+  load();
+  return () => { if (cursor) cursor.close(); };
+}
