@@ -12,6 +12,16 @@ scenes:
 Split by scene: fold k tests the scenes with (action + colour + shape) % 4 == k (indices in the
 grammar), i.e. each object is tested with one action that it is never seen with in training and
 each action with four objects it is never seen with in training. Four folds cover every scene once.
+The object is probed twice: one 16-way logistic regression, and "factorised" (a colour probe and a
+shape probe, the object right only when both are). The vision features are factorised by
+construction (mean R, G, B carry the colour, the 16 distances the shape); with 12 training
+recordings per object class the 16-way probe has to learn each colour x shape conjunction from
+three scenes, while the factorised probes see 48 per class. The check uses the factorised probe;
+both numbers are printed.
+
+A probe that reads only the action therefore scores *below* chance on the objects (it names the
+objects seen with that action in training, never the held-out one): "near chance" means that
+proprioception carries no object information beyond the action.
 
     .venv/bin/python benchmarks/probe.py [--corpus data/artefacts/corpus.npz]
 """
@@ -65,23 +75,41 @@ def scene_split_accuracy(x: np.ndarray, y: np.ndarray, fold: np.ndarray) -> floa
     return correct / len(y)
 
 
+def factorised_object_accuracy(
+    x: np.ndarray, colours: np.ndarray, shapes: np.ndarray, fold: np.ndarray
+) -> float:
+    """16-object accuracy of a colour probe and a shape probe together (right only if both are)."""
+    correct = 0
+    for k in range(FOLDS):
+        test = fold == k
+        hits = np.ones(int(test.sum()), dtype=bool)
+        for y in (colours, shapes):
+            probe = make_pipeline(StandardScaler(), LogisticRegression(C=1.0, max_iter=5000))
+            probe.fit(x[~test], y[~test])
+            hits &= probe.predict(x[test]) == y[test]
+        correct += int(hits.sum())
+    return correct / len(colours)
+
+
 def run(corpus: Corpus) -> dict[str, float]:
     feats = features(corpus)
     fold = _fold_of(corpus)
-    objects = np.array([f"{e.scene.colour} {e.scene.shape}" for e in corpus.entries])
-    actions = np.array([e.scene.action for e in corpus.entries])
-    return {
-        "vision -> object (16)": scene_split_accuracy(feats["vision"], objects, fold),
-        "vision -> action (4)": scene_split_accuracy(feats["vision"], actions, fold),
-        "proprioception -> action (4)": scene_split_accuracy(feats["proprioception"], actions, fold),
-        "proprioception -> object (16)": scene_split_accuracy(feats["proprioception"], objects, fold),
-        "proprioception -> colour (4)": scene_split_accuracy(
-            feats["proprioception"], np.array([e.scene.colour for e in corpus.entries]), fold
-        ),
-        "proprioception -> shape (4)": scene_split_accuracy(
-            feats["proprioception"], np.array([e.scene.shape for e in corpus.entries]), fold
-        ),
+    labels = {
+        "object (16)": np.array([f"{e.scene.colour} {e.scene.shape}" for e in corpus.entries]),
+        "colour (4)": np.array([e.scene.colour for e in corpus.entries]),
+        "shape (4)": np.array([e.scene.shape for e in corpus.entries]),
+        "action (4)": np.array([e.scene.action for e in corpus.entries]),
     }
+    scores = {
+        f"{modality} -> {target}": scene_split_accuracy(x, y, fold)
+        for modality, x in feats.items()
+        for target, y in labels.items()
+    }
+    for modality, x in feats.items():
+        scores[f"{modality} -> object, factorised"] = factorised_object_accuracy(
+            x, labels["colour (4)"], labels["shape (4)"], fold
+        )
+    return scores
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -93,11 +121,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"corpus: {corpus.path} ({len(corpus)} recordings, seed {corpus.seed})")
     print(f"split by scene, {FOLDS} folds; accuracy on held-out scenes:")
     for name, value in scores.items():
-        print(f"  {name:32s} {value:.3f}")
+        print(f"  {name:38s} {value:.3f}")
     found = np.array([e.object_found for e in corpus.entries])
     print(f"  vision found the object in {found.mean():.1%} of frames (worst recording {found.min():.1%})")
     checks = {
-        "vision -> object >= 0.95": scores["vision -> object (16)"] >= 0.95,
+        "vision -> object (factorised) >= 0.95": scores["vision -> object, factorised"] >= 0.95,
         "proprioception -> action >= 0.95": scores["proprioception -> action (4)"] >= 0.95,
         # chance is 1/16 = 0.0625; 0.15 leaves room for the banana-slide exception and noise
         "proprioception -> object <= 0.15": scores["proprioception -> object (16)"] <= 0.15,

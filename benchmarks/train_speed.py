@@ -140,12 +140,12 @@ def bench_nets(epochs: int, seed: int = 0) -> dict:
     return results
 
 
-def bench_training(modes: list[str], fold: int = 0, seed: int = 0) -> dict:
+def bench_training(modes: list[str], corpus_path: str | None = None, fold: int = 0, seed: int = 0) -> dict:
     from data.corpus import load_corpus
     from model.evaluation import fold_split
     from model.training import train
 
-    corpus = load_corpus()
+    corpus = load_corpus(corpus_path)
     data = corpus.training_data()
     train_idx, _ = fold_split(data.ids, fold)
     out = {}
@@ -160,6 +160,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--epochs", type=int, default=10, help="timed epochs per net (median reported)")
     parser.add_argument("--skip-training", action="store_true", help="only the per-epoch timings")
+    parser.add_argument("--modes", nargs="+", default=["faithful", "end_to_end"], help="modes to time")
+    parser.add_argument("--corpus", default=None, help="corpus .npz (default: the shipped one)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -168,8 +170,8 @@ def main() -> int:
     if not args.skip_training:
         from model.training import available_modes
 
-        modes = [m for m in ("faithful", "end_to_end") if m in available_modes()]
-        report["training"] = bench_training(modes)
+        modes = [m for m in args.modes if m in available_modes()]
+        report["training"] = bench_training(modes, args.corpus)
     report["load_average_after"] = os.getloadavg()
     if args.json:
         print(json.dumps(report, indent=2))

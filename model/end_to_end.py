@@ -24,12 +24,16 @@ Training, top to bottom (`train_end_to_end`):
 1. Auditory stage: MTRNN_a and the CAs' projection (E, e) learn the KLD of the utterances
    (3.1.3) with teacher forcing alpha (eq. 5), starting from c_a,0 = E p* + e where p* are the
    words the teacher said: the CAs are trained through the auditory loss. All recordings of a
-   scene share an utterance and a p*, so each distinct utterance is one sequence (the mean loss,
-   hence every RPROP sign, is the same as with the duplicates).
+   scene share an utterance and a p*, so each distinct utterance is one sequence (with the same
+   number of recordings per scene the mean loss, hence every RPROP sign, is unchanged).
 2. Perception stage: MTRNN_s, MTRNN_v and the word units (W_s, W_v, b) learn which words the
    teacher said (the learner hears the utterance), from the Csc states at `word_points` points
-   between `word_from` and 100 % of each sequence. With `modality_experts` each encoder's units
-   learn on their own and their sum is eq. (17) (a product of experts).
+   between `word_from` and 100 % of each sequence. The encoders read standardised inputs
+   (`InputNormaliser`, folded into their input weights afterwards). `selection_scenes` training
+   scenes are held out: every `select_every` epochs each encoder's word units get one gain per
+   slot fitted on them (`calibrate`: how far that sense can be trusted for that slot on unseen
+   scenes), and the state with the best held-out accuracy is kept, gains folded into W_s, W_v.
+   With `modality_experts` each encoder's units learn on their own (a product of experts).
 3. Joint stage (`joint_epochs`): perception -> CAs -> MTRNN_a, everything through the auditory
    loss (plus the word loss when on). With `word_loss` off this is the only stage: the plain
    2020-style end-to-end training that the options are measured against.
@@ -76,19 +80,17 @@ class EndToEndOptions:
     word_points: int = 8  # Csc states read at this many points of each sequence ...
     word_from: float = 0.3  # ... evenly from this fraction of its length to its end
     slot_softmax: bool = True  # one word per slot (softmax); False: a logistic per word
-    modality_experts: bool = True  # each encoder's word units learn alone; eq. (17) sums them
+    modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
     normalise_inputs: bool = True  # standardise encoder inputs while training (`InputNormaliser`)
     selection_scenes: int = 6  # training scenes held out to calibrate and select perception
     select_every: int = 10  # epochs between two selections
-    auditory_epochs: int | None = None  # stage 1; None: config.training.epochs_auditory
-    perception_epochs: int | None = None  # stage 2; None: config.training.epochs_somatosensory
+    input_noise: float = 0.0  # std of Gaussian noise on the (normalised) encoder inputs, per epoch
+    vision_window: int = 0  # > 0: MTRNN_v learns from a random window of this many frames per epoch
+    auditory_epochs: int = 1000  # stage 1
+    perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
-
-    @classmethod
-    def from_dict(cls, d: dict) -> EndToEndOptions:
-        return cls(**d)
 
 
 # --- the words the learner heard -----------------------------------------------------------------
@@ -311,8 +313,9 @@ def selection_split(
         for slot, word in enumerate(w)
     }
     held: set[str] = set()
-    for i in np.random.default_rng([seed, 7]).permutation(len(scene_words)):
-        key = sorted(scene_words)[i]
+    ordered = sorted(scene_words)
+    for i in np.random.default_rng([seed, 7]).permutation(len(ordered)):
+        key = ordered[i]
         words = list(enumerate(scene_words[key]))
         if len(held) < scenes and all(remaining[w] > 2 for w in words):
             held.add(key)
@@ -324,7 +327,7 @@ def selection_split(
 
 @dataclass
 class _Perception:
-    """What the perception stage reads: (normalised) inputs, reading points, heard words."""
+    """What the perception stage reads: padded (normalised) inputs and the heard words."""
 
     proprioception: Tensor
     proprioception_lengths: Tensor
@@ -334,6 +337,25 @@ class _Perception:
 
     def subset(self, idx: list[int]) -> _Perception:
         return _Perception(*(getattr(self, f.name)[idx] for f in fields(self)))
+
+    def with_noise(self, std: float, generator: torch.Generator) -> _Perception:
+        """The same recordings with Gaussian noise of `std` on every input."""
+
+        def noisy(x: Tensor) -> Tensor:
+            return x + std * torch.randn(x.shape, generator=generator)
+
+        return replace(self, proprioception=noisy(self.proprioception), vision=noisy(self.vision))
+
+    def vision_windows(self, width: int, generator: torch.Generator) -> _Perception:
+        """Each recording's vision cut to a random window of `width` frames (whole if shorter)."""
+        lengths = self.vision_lengths.clamp(max=width)
+        room = (self.vision_lengths - lengths + 1).float()
+        starts = (torch.rand(len(lengths), generator=generator) * room).long()
+        steps = (starts[:, None] + torch.arange(int(lengths.max()))[None, :]).clamp(
+            max=self.vision.shape[1] - 1
+        )
+        rows = torch.arange(len(lengths))[:, None]
+        return replace(self, vision=self.vision[rows, steps], vision_lengths=lengths)
 
 
 def train_auditory_stage(
@@ -415,6 +437,7 @@ def train_perception_stage(
     held_out: _Perception | None,
     options: EndToEndOptions,
     report: _Reporter,
+    generator: torch.Generator,
 ) -> dict:
     """Stage 2: encoders and word units learn the heard words at the reading points. With a
     held-out set, every `select_every` epochs the encoders' gains are calibrated on it and the
@@ -433,7 +456,10 @@ def train_perception_stage(
     best: dict = {"accuracy": -1.0}
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
-        z_s, z_v = perception_logits(model, assemblies, fit, options.word_points, options.word_from)
+        seen = fit.with_noise(options.input_noise, generator) if options.input_noise > 0 else fit
+        if options.vision_window > 0:
+            seen = seen.vision_windows(options.vision_window, generator)
+        z_s, z_v = perception_logits(model, assemblies, seen, options.word_points, options.word_from)
         if options.modality_experts:
             loss = assemblies.word_loss(z_s, target) + assemblies.word_loss(z_v, target)
         else:
@@ -502,11 +528,6 @@ def train_end_to_end(
     """The `end_to_end` mode (module docstring); `config` comes from `model.training.prepare`."""
     options = options or EndToEndOptions()
     training = config.training
-    options = replace(
-        options,
-        auditory_epochs=options.auditory_epochs or training.epochs_auditory,
-        perception_epochs=options.perception_epochs or training.epochs_somatosensory,
-    )
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
     slots = WordSlots.from_utterances(data.utterances)
@@ -553,7 +574,9 @@ def train_end_to_end(
             fit_idx, held_idx = selection_split(data, slots, options.selection_scenes, seed)
             if held_idx:
                 fit, held_out = perception.subset(fit_idx), perception.subset(held_idx)
-        selection = train_perception_stage(model, assemblies, fit, held_out, options, report)
+        selection = train_perception_stage(
+            model, assemblies, fit, held_out, options, report, torch.Generator().manual_seed(seed + 5)
+        )
         seconds["perception"] = time.perf_counter() - start
 
     if options.joint_epochs > 0:

@@ -370,10 +370,10 @@ class JobManager:
                 if time.monotonic() - last_store > PROGRESS_STORE_SECONDS:
                     self.store.update_job(job_id, progress=event)
                     last_store = time.monotonic()
-            self._publish(job_id, event)
-            if event["type"] in ("done", "error"):
+            if event["type"] in ("done", "error"):  # published after the bookkeeping, with the status
                 final = event
                 break
+            self._publish(job_id, event)
         running.process.join(timeout=10)
         if job_id in self._latest:
             self.store.update_job(job_id, progress=self._latest[job_id])

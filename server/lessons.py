@@ -17,6 +17,8 @@ the router keeps per app (`app.state.lessons`); nothing here is a module global.
 from __future__ import annotations
 
 import base64
+import importlib
+import json
 import logging
 import math
 import threading
@@ -43,7 +45,7 @@ from model.encoding.utterance import (
     text_to_phonemes,
 )
 from model.encoding.vision import SECTORS, VISUAL_FEATURES, VisionParams, pipeline_steps
-from model.metrics import CscPCA, d_avg, d_rel, parse_slots, words_of
+from model.metrics import CscPCA, d_avg, d_rel, parse_slots, sentence_exact, words_of
 from model.multimtrnn import MultiMTRNN
 
 logger = logging.getLogger(__name__)
@@ -129,13 +131,32 @@ class LessonStore:
         self._models: dict[str, LessonModel] = {}
         self._surveys: dict[str, Survey] = {}
         self._pcas: dict[tuple[str, str], tuple[CscPCA, np.ndarray]] = {}
-        self.cosine = CosineJobs()
+        self._modes: dict[str, str] = {}
         sentences = sorted({e.utterance for e in state.entries.values()})
         self.corpus_lexicon = Lexicon.from_sentences(sentences) if sentences else None
+        self.cosine = CosineJobs()
+        self.cosine.warm_up()
+        threading.Thread(target=self._warm_survey, name="lessons-survey", daemon=True).start()
+
+    def _warm_survey(self) -> None:
+        """Describe the corpus with the served model before a lesson needs it (lessons 4, 6, 7)."""
+        try:
+            self.survey()
+        except Exception:  # a lesson asking later gets the error with its message
+            logger.exception("lessons: could not survey the corpus with the served model")
 
     # models
     def model_names(self) -> list[str]:
         return list(self.state.model_dirs)
+
+    def model_modes(self) -> dict[str, str]:
+        """Training mode of every model (from its meta.json, without loading the weights)."""
+        with self._lock:
+            for name, directory in self.state.model_dirs.items():
+                if name not in self._modes:
+                    meta = json.loads((Path(directory) / checkpoint.META).read_text())
+                    self._modes[name] = str(meta.get("mode", "unknown"))
+            return {name: self._modes[name] for name in self.state.model_dirs}
 
     @property
     def served(self) -> str:
@@ -333,12 +354,16 @@ def speak(text: str, gamma: int, omega: int, sigma2: float, nu: int, grammar: Le
 
 
 def _data_url(image: np.ndarray) -> str:
-    """An RGB or grey uint8 image as a PNG data URL."""
-    bgr = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
-    ok, buf = cv2.imencode(".png", bgr, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    """A stage image as a data URL: masks and edges (grey) as PNG, colour pictures as JPEG."""
+    if image.ndim == 2:
+        ok, buf = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 3])
+        kind = "png"
+    else:
+        ok, buf = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, 88])
+        kind = "jpeg"
     if not ok:
         raise LessonError("could not encode an image", 500)
-    return "data:image/png;base64," + base64.b64encode(buf.tobytes()).decode("ascii")
+    return f"data:image/{kind};base64," + base64.b64encode(buf.tobytes()).decode("ascii")
 
 
 def decode_image(data: bytes) -> np.ndarray:
@@ -495,6 +520,7 @@ def feeling(store: LessonStore, action: str, colour: str) -> dict:
 
 LIVE_COSINE_EPOCHS = 1000  # the live run stops here if the error has not fallen below threshold
 LIVE_SNAPSHOT_EVERY = 10  # epochs between two Csc snapshots streamed to the page
+KEPT_COSINE_RUNS = 64  # finished runs kept for replay
 
 
 @dataclass
@@ -558,6 +584,16 @@ class CosineJobs:
         self._lock = threading.Lock()
         self._jobs: dict[str, CosineJob] = {}
         self._by_key: dict[tuple[float, int], str] = {}
+        self._warm = False
+
+    def warm_up(self) -> None:
+        """Import in the background what a run's first optimiser step imports (torch._dynamo,
+        seconds on a busy machine), so that the learner's first run starts at once."""
+        with self._lock:
+            if self._warm:
+                return
+            self._warm = True
+        threading.Thread(target=importlib.import_module, args=("torch._dynamo",), daemon=True).start()
 
     def start(self, psi: float, seed: int) -> CosineJob:
         if not (math.isfinite(psi) and 0.0 <= psi <= 0.01):
@@ -576,6 +612,10 @@ class CosineJobs:
             job = CosineJob(uuid.uuid4().hex[:12], float(psi), int(seed), self.max_epochs)
             self._jobs[job.id] = job
             self._by_key[key] = job.id
+            while len(self._jobs) > KEPT_COSINE_RUNS:  # forget the oldest finished runs
+                oldest = next(iter(self._jobs.values()))
+                del self._jobs[oldest.id]
+                self._by_key.pop((oldest.psi, oldest.seed), None)
         threading.Thread(target=self._run, args=(job,), name=f"cosine-{job.id}", daemon=True).start()
         return job
 
@@ -743,7 +783,7 @@ def generalising(store: LessonStore, name: str | None) -> dict:
             {
                 "id": rid,
                 "said": text,
-                "exact": text.strip() == e.utterance.strip(),
+                "exact": sentence_exact(text, e.utterance),
                 "wrong": [k for k in target if got[k] != target[k]],
             }
         )

@@ -8,6 +8,7 @@ into `data/` and `model/` goes through `Backend`, the one place that knows their
 from __future__ import annotations
 
 import hashlib
+import json
 import logging
 import threading
 import time
@@ -121,6 +122,7 @@ class Upload:
 
     id: str
     filename: str
+    model: str  # the model that described it
     recording: Any
     proprioception: np.ndarray
     vision: np.ndarray
@@ -187,6 +189,7 @@ class AppState:
         self._csc: dict[str, CscCache] = {}
         self._frames: OrderedDict[str, np.ndarray] = OrderedDict()
         self._uploads: OrderedDict[str, Upload] = OrderedDict()
+        self._targets: dict[str, np.ndarray] = {}
         self.viewer: SceneViewer | None = None
         logger.info(
             "corpus: %d recordings; model %r; ready in %.1f s",
@@ -219,8 +222,6 @@ class AppState:
             if name in self._loaded:
                 out[name] = self._loaded[name].meta
             else:
-                import json
-
                 out[name] = json.loads((path / "meta.json").read_text())
         return out
 
@@ -246,7 +247,7 @@ class AppState:
         with self._lock:
             d = self.backend.describe(self._current.model, self._current.lexicon, prop, vis)
         timings["model_ms"] = (time.perf_counter() - t0) * 1e3
-        target = self.backend.encode_utterance(expected) if expected else None
+        target = self._target(expected) if expected else None
         return Result(
             text=d.text,
             words=list(d.words),
@@ -257,6 +258,13 @@ class AppState:
             target_activity=target,
             timings=timings,
         )
+
+    def _target(self, text: str) -> np.ndarray:
+        """The encoded utterance (eqs. 18-21), kept per text: the corpus has 64 of them."""
+        with self._lock:
+            if text not in self._targets:
+                self._targets[text] = self.backend.encode_utterance(text)
+            return self._targets[text]
 
     def describe_scene(self, rid: str) -> Result:
         entry = self.entry(rid)
@@ -276,7 +284,7 @@ class AppState:
         result = self._describe(prop, vis, getattr(rec, "utterance", None) or None, timings)
         timings["total_ms"] = (time.perf_counter() - t0) * 1e3
         uid = "upload-" + hashlib.sha1(data).hexdigest()[:12]
-        upload = Upload(uid, filename, rec, prop, vis, result)
+        upload = Upload(uid, filename, self._current.name, rec, prop, vis, result)
         with self._lock:
             self._uploads[uid] = upload
             self._uploads.move_to_end(uid)

@@ -1,7 +1,7 @@
 """The 3D scene (viser): the NAO's right arm replaying a recording over a table and its object.
 
 `SceneViewer` owns its viser server and every handle it adds. The arm is drawn from primitives
-placed by `data.nao.forward_kinematics` (links as thick line segments, joints as spheres), the
+placed by `data.nao.forward_kinematics` (links as boxes, joints as spheres), the
 same chain as the URDF. One time cursor is shared by the 3D view's own controls and the web page:
 `show(...)` loads a recording, `seek(t)`, `play()`, `pause()`, `set_speed(x)` move it, and every
 change is sent to the listeners (the page's WebSocket) so the camera frame, the plots and the
@@ -47,6 +47,18 @@ def free_port(host: str = "127.0.0.1") -> int:
         return int(s.getsockname()[1])
 
 
+def _x_to(direction: np.ndarray) -> tuple[float, float, float, float]:
+    """Quaternion (w, x, y, z) turning the x axis onto `direction`."""
+    d = direction / (np.linalg.norm(direction) + 1e-12)
+    axis = np.cross([1.0, 0.0, 0.0], d)
+    s = np.linalg.norm(axis)
+    if s < 1e-9:
+        return (1.0, 0.0, 0.0, 0.0) if d[0] > 0 else (0.0, 0.0, 0.0, 1.0)
+    angle = np.arctan2(s, d[0])
+    v = axis / s * np.sin(angle / 2)
+    return (float(np.cos(angle / 2)), float(v[0]), float(v[1]), float(v[2]))
+
+
 @dataclass
 class Cursor:
     """The shared time cursor."""
@@ -82,9 +94,11 @@ class SceneViewer:
     def _build_scene(self) -> None:
         scene = self.server.scene
         scene.set_up_direction("+z")
-        self.server.initial_camera.position = (0.75, -0.65, 0.45)
-        self.server.initial_camera.look_at = (0.12, -0.1, 0.0)
-        self.server.gui.configure_theme(control_layout="collapsible", show_logo=False, show_share_button=False)
+        self.server.initial_camera.position = (0.42, -0.55, 0.3)
+        self.server.initial_camera.look_at = (0.18, -0.08, 0.02)
+        self.server.gui.configure_theme(
+            control_layout="collapsible", control_width="small", show_logo=False, show_share_button=False
+        )
         self.table = scene.add_box(
             "/table", color=TABLE_RGB, dimensions=(0.5, 0.7, 0.02), position=(0.2, -0.1, -0.1)
         )
@@ -92,9 +106,9 @@ class SceneViewer:
             "/torso", color=(200, 200, 205), dimensions=(0.1, 0.12, 0.2), position=(-0.03, 0.0, 0.03)
         )
         self.head = scene.add_icosphere("/head", radius=0.06, color=(235, 235, 240), position=(-0.02, 0, 0.2))
-        self.links = scene.add_line_segments(
-            "/arm/links", points=np.zeros((3, 2, 3)), colors=ARM_RGB, thickness=0.035
-        )
+        self.links = [
+            scene.add_box(f"/arm/link{k}", color=ARM_RGB, dimensions=(0.1, 0.03, 0.03)) for k in range(3)
+        ]
         self.joints = [
             scene.add_icosphere(f"/arm/{name}", radius=0.022 if name != "hand" else 0.026, color=JOINT_RGB)
             for name in KEYPOINTS
@@ -174,14 +188,16 @@ class SceneViewer:
         table_z = float(hand[lowest, 2]) - 0.03
         with self._lock, self.server.atomic():
             self._keypoints = keypoints
+            for link, a, b in zip(self.links, keypoints[0, :-1], keypoints[0, 1:], strict=True):
+                link.dimensions = (float(np.linalg.norm(b - a)), 0.03, 0.03)  # rigid links
             self._fps = float(fps)
             self.cursor = Cursor(
                 source=source, t=0.0, duration_s=(len(joints) - 1) / fps, speed=self.cursor.speed
             )
             self.table.position = (float(hand[:, 0].mean()), float(hand[:, 1].mean()), table_z - 0.01)
             self.table.dimensions = (
-                float(np.ptp(hand[:, 0])) + 0.35,
-                float(np.ptp(hand[:, 1])) + 0.45,
+                float(np.ptp(hand[:, 0])) + 0.25,
+                float(np.ptp(hand[:, 1])) + 0.3,
                 0.02,
             )
             self._place_object(colour, shape, hand[lowest, :2] + np.array([0.04, 0.0]), table_z)
@@ -223,7 +239,9 @@ class SceneViewer:
             return
         step = min(int(round(self.cursor.t * self._fps)), len(self._keypoints) - 1)
         kp = self._keypoints[step]
-        self.links.points = np.stack([kp[:-1], kp[1:]], axis=1)
+        for link, a, b in zip(self.links, kp[:-1], kp[1:], strict=True):
+            link.position = tuple(float(v) for v in (a + b) / 2)
+            link.wxyz = _x_to(b - a)
         for handle, p in zip(self.joints, kp, strict=True):
             handle.position = tuple(float(v) for v in p)
         self._updating_gui = True

@@ -4,8 +4,9 @@ The pipeline, per frame (RGB uint8, any size):
 
 1. **Downscale** to ``VisionParams.work_width`` pixels wide (160 by default, aspect kept). Mean
    shift is the expensive step (at 320x240 ``pyrMeanShiftFiltering`` costs ~83 ms with
-   ``maxLevel=0`` and ~27 ms with ``maxLevel=1``); at 160x120 with ``maxLevel=1`` the whole
-   pipeline stays within ~10 ms single-threaded.
+   ``maxLevel=0`` and ~27 ms with ``maxLevel=1``); at 160x120 with ``maxLevel=1`` and a spatial
+   radius of 4 it costs ~3 ms and the whole pipeline ~6 ms of CPU per 320x240 rendered frame
+   (``benchmarks/vision.py``). The contour is refined at full resolution (step 5).
 2. **Mean-shift segmentation** (Comaniciu & Meer 2002): ``cv2.pyrMeanShiftFiltering``.
 3. **Object mask by colour saturation**. The largest contour is not the object: the robot's arm
    enters from the image border and merges with it. The object is the *most saturated sizeable
@@ -38,10 +39,13 @@ The pipeline, per frame (RGB uint8, any size):
    clipping, no tuning constant: disc 0.43, square corner 0.51, a 10:1 stick 0.79). Sectors are
    fixed in the image, so the 16 values are only approximately rotation invariant (a concave
    shape's gap can move by one sector).
-7. **Mean R, G, B** of the frame's pixels inside the contour, in [0, 1]. With
-   ``white_balance="grey_world"`` they are divided by the scene's white estimate (the per-channel
-   median of the mean-shifted frame, normalised to keep brightness), which removes a colour cast
-   of the light or camera; ``"none"`` is the paper's raw mean.
+7. **Mean R, G, B** of the frame's pixels inside the contour, in [0, 1]: the paper's raw mean
+   (``white_balance="none"``, the default). ``white_balance="grey_world"`` divides them by the
+   scene's white estimate (the per-channel median of the mean-shifted frame, normalised to keep
+   brightness), which removes a colour cast of light or camera but assumes a grey table. On
+   rendered recordings with tinted tables (wood, cloth) and +-14 % camera white balance, and
+   under extra global casts, neither was better (colour classification within +-2 %), so the
+   default stays with the paper.
 8. **Centroid** (x / width, y / height) in [0, 1]: 2 optional extra values.
 
 Output: ``np.ndarray[21]`` float32, the paper's 19 values (``VISUAL_FEATURES``) then the centroid.
@@ -76,7 +80,7 @@ class VisionParams:
     """Parameters of the Fig. 7 pipeline. Defaults were tuned on synthetic and rendered frames."""
 
     work_width: int = 160  # frames are resized to this width (aspect kept) before mean shift
-    spatial_radius: int = 6  # mean shift spatial window (pixels at working resolution)
+    spatial_radius: int = 4  # mean shift spatial window (pixels at working resolution; 6 costs 2x)
     colour_radius: int = 24  # mean shift colour window
     max_level: int = 1  # mean shift pyramid levels (0 is ~3x slower)
     canny_low: int = 40  # Canny hysteresis thresholds on the mean-shifted image (colour)
@@ -89,7 +93,7 @@ class VisionParams:
     min_area_fraction: float = 0.0015  # smallest object, as a fraction of the image
     max_area_fraction: float = 0.5  # larger saturated regions are a coloured table, not an object
     border_penalty: float = 0.5  # score factor for regions touching the image border (the arm)
-    white_balance: Literal["none", "grey_world"] = "grey_world"  # colour features; "none" = paper
+    white_balance: Literal["none", "grey_world"] = "none"  # colour features; "none" = the paper
 
     def __post_init__(self) -> None:
         if self.white_balance not in ("none", "grey_world"):
@@ -148,7 +152,7 @@ def _check_frame(frame: np.ndarray) -> np.ndarray:
 
 def _white_gains(image: np.ndarray) -> np.ndarray:
     """Per-channel gains that map the image's median colour (the table) to grey of equal brightness."""
-    ref = np.median(image.reshape(-1, 3), axis=0).astype(np.float64) + 1.0
+    ref = np.median(image.reshape(-1, 3)[::3], axis=0).astype(np.float64) + 1.0
     return np.clip(ref.mean() / ref, 0.33, 3.0)
 
 
@@ -187,32 +191,24 @@ def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple
     closed = cv2.morphologyEx(edges, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
     pieces = mask & (closed == 0)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(pieces, connectivity=4)
-    area_min = params.min_area_fraction * h * w
-    area_max = params.max_area_fraction * h * w
-    best, best_score = -1, params.min_saturation  # a penalised region must still be saturated
-    for i in range(1, n):
-        x, y, bw, bh, area = stats[i]
-        if area < area_min or area > area_max:
-            continue
-        score = float(sat_eff[labels == i].mean()) / 255.0
-        if x == 0 or y == 0 or x + bw == w or y + bh == h:
-            score *= params.border_penalty
-        if score > best_score:
-            best, best_score = i, score
-    if best < 0:
+    flat = labels.ravel()
+    count = np.bincount(flat, minlength=n).astype(np.float64)
+    piece_sat = np.bincount(flat, sat_eff.ravel(), minlength=n) / np.maximum(count, 1) / 255.0
+    x, y, bw, bh, area = stats.T
+    touches_border = (x == 0) | (y == 0) | (x + bw == w) | (y + bh == h)
+    score = piece_sat * np.where(touches_border, params.border_penalty, 1.0)
+    sizeable = (area >= params.min_area_fraction * h * w) & (area <= params.max_area_fraction * h * w)
+    sizeable[0] = False  # label 0 is everything outside the mask
+    score[~sizeable] = 0.0
+    best = int(np.argmax(score))
+    if score[best] < params.min_saturation:  # a (penalised) region must still be saturated
         return None, info
     # Step 4, second half: faces of the object that edges cut off the chosen piece (a dice's lit and
     # shaded sides, a phone's dark screen, an apple's shadowed half) touch it and share its hue;
     # merge those, face by face, then give back the edge pixels of that hue.
-    count = np.bincount(labels.ravel(), minlength=n).astype(np.float32)
-    mean_rgb = (
-        np.stack(
-            [np.bincount(labels.ravel(), ms[..., c].ravel(), minlength=n) for c in range(3)], axis=1
-        )
-        / np.maximum(count, 1)[:, None]
-    )
+    mean_rgb = np.stack([np.bincount(flat, ms[..., c].ravel(), minlength=n) for c in range(3)], axis=1)
+    mean_rgb /= np.maximum(count, 1)[:, None]
     piece_hue = cv2.cvtColor((mean_rgb / 255.0).astype(np.float32)[:, None, :], cv2.COLOR_RGB2HSV)[:, 0, 0]
-    piece_sat = np.bincount(labels.ravel(), sat_eff.ravel(), minlength=n) / np.maximum(count, 1)
     seed_hue, seed_sat = float(piece_hue[best]), float(piece_sat[best])
     joins = (_hue_distance(piece_hue, seed_hue) <= params.hue_tolerance) & (piece_sat >= 0.5 * seed_sat)
     joins &= count >= 4

@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     except state.backend.recording_error as exc:
         print(f"error: {exc}")
         return 2
-    answer = description_of(up.result, up.id, "upload", state.model.name, state.backend.phoneme_labels)
+    answer = description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels)
     if args.json:
         print(answer.model_dump_json(indent=1))
     else:

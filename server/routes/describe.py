@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, HTTPException, Request
+from fastapi import APIRouter, HTTPException, Request, Response
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
@@ -36,11 +36,20 @@ def description_of(result: Result, rid: str, source: str, model: str, labels: li
     )
 
 
-@router.post("/scenes/{rid}/describe", response_model=Description, responses={404: {"model": Problem}})
-def describe_scene(state: StateDep, rid: str) -> Description:
+def _json(answer: Description) -> Response:
+    """The answer serialised once (FastAPI would validate the ~5000 activity values again)."""
+    return Response(answer.model_dump_json(), media_type="application/json")
+
+
+@router.post(
+    "/scenes/{rid}/describe",
+    response_model=None,
+    responses={200: {"model": Description}, 404: {"model": Problem}},
+)
+def describe_scene(state: StateDep, rid: str) -> Response:
     """What the served model says about a corpus recording (from its stored encodings)."""
     result = state.describe_scene(rid)
-    return description_of(result, rid, "corpus", state.model.name, state.backend.phoneme_labels)
+    return _json(description_of(result, rid, "corpus", state.model.name, state.backend.phoneme_labels))
 
 
 async def _read_capped(upload: UploadFile, cap: int) -> bytes:
@@ -55,8 +64,13 @@ async def _read_capped(upload: UploadFile, cap: int) -> bytes:
 
 @router.post(
     "/describe",
-    response_model=Description,
-    responses={400: {"model": Problem}, 413: {"model": Problem}, 422: {"model": Problem}},
+    response_model=None,
+    responses={
+        200: {"model": Description},
+        400: {"model": Problem},
+        413: {"model": Problem},
+        422: {"model": Problem},
+    },
     openapi_extra={
         "requestBody": {
             "content": {
@@ -71,7 +85,7 @@ async def _read_capped(upload: UploadFile, cap: int) -> bytes:
         }
     },
 )
-async def describe_upload(state: StateDep, request: Request) -> Description:
+async def describe_upload(state: StateDep, request: Request) -> Response:
     """Upload a recording in format v1 (multipart field ``recording``, a .zip or .npz) and describe it."""
     cap = state.backend.max_upload_bytes
     declared = request.headers.get("content-length")
@@ -92,7 +106,7 @@ async def describe_upload(state: StateDep, request: Request) -> Description:
         up = await run_in_threadpool(state.describe_upload, data, filename)
     except state.backend.recording_error as exc:
         raise HTTPException(400, str(exc)) from exc
-    return description_of(up.result, up.id, "upload", state.model.name, state.backend.phoneme_labels)
+    return _json(description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels))
 
 
 @router.get("/uploads/{uid}", response_model=RecordingDetail, responses={404: {"model": Problem}})
@@ -121,4 +135,4 @@ def get_upload(state: StateDep, uid: str) -> RecordingDetail:
 def get_upload_description(state: StateDep, uid: str) -> Description:
     """The description computed when the recording was uploaded."""
     up = state.upload(uid)
-    return description_of(up.result, up.id, "upload", state.model.name, state.backend.phoneme_labels)
+    return description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels)

@@ -6,11 +6,11 @@
     GET    /api/jobs/{id}/events       text/event-stream: snapshot, progress (epoch, loss, Csc PCA
                                        points), run, done / error / cancelled
     POST   /api/jobs/{id}/cancel       kill it
-    POST   /api/jobs/{id}/serve        make the model a finished training job wrote the served one
-                                       (the app's model registry, as PUT /api/models/selected)
     GET    /api/results                the report's figure data (docs/figures/results.json)
     GET    /api/results/figures/{png}  the report's PNG figures
 
+A finished training job's model joins the app's model registry (`/api/models` lists it, and
+`PUT /api/models/selected` serves it; after a restart the app finds it in the models folder).
 The `JobManager` lives on `app.state.jobs`; it is created on first use when the app's lifespan
 did not create it (`server.routes.jobs.attach_jobs(app, settings)` does it at start-up).
 """
@@ -33,7 +33,6 @@ from server.jobs import JobManager
 from server.settings import REPO_ROOT, Settings
 
 router = APIRouter(tags=["jobs"])
-FIGURES_DIR = REPO_ROOT / "docs" / "figures"
 _create_lock = threading.Lock()
 
 
@@ -64,7 +63,13 @@ class Job(BaseModel):
 
 
 def run_dir() -> Path:
+    """The run store of the app's jobs: $MTRNN_RUN_DIR or runs/ (the CLI's default too)."""
     return Path(os.environ.get("MTRNN_RUN_DIR", REPO_ROOT / "runs"))
+
+
+def figures_dir() -> Path:
+    """Where `mtrnn report` wrote its figures: $MTRNN_FIGURES_DIR or docs/figures."""
+    return Path(os.environ.get("MTRNN_FIGURES_DIR", REPO_ROOT / "docs" / "figures"))
 
 
 def _register_model(app: FastAPI, name: str, path: Path) -> None:
@@ -139,23 +144,6 @@ def cancel_job(job_id: str, jobs: Jobs) -> dict:
     return _job(jobs, job_id)
 
 
-@router.post("/api/jobs/{job_id}/serve")
-async def serve_model(job_id: str, request: Request, jobs: Jobs) -> dict:
-    """Serve the model of a finished training job (the app's registry selects it)."""
-    job = _job(jobs, job_id)
-    if job["kind"] != "train" or job["status"] != "done":
-        raise HTTPException(409, f"job {job_id} is not a finished training job")
-    name, path = job["result"]["model"], Path(job["result"]["path"])
-    state = getattr(request.app.state, "mtrnn", None)
-    if state is None:
-        raise HTTPException(503, "the app serves no models in this process")
-    if not (path / "meta.json").is_file():
-        raise HTTPException(410, f"the model folder {path} is gone")
-    _register_model(request.app, name, path)
-    await run_in_threadpool(state.select_model, name)
-    return {"selected": name}
-
-
 def _sse(event: dict) -> str:
     return f"event: {event.get('type', 'message')}\ndata: {json.dumps(event)}\n\n"
 
@@ -195,7 +183,7 @@ async def job_events(job_id: str, request: Request, jobs: Jobs) -> StreamingResp
 @router.get("/api/results")
 def results() -> FileResponse:
     """The numbers behind docs/RESULTS.md's figures (written by `mtrnn report`)."""
-    path = FIGURES_DIR / "results.json"
+    path = figures_dir() / "results.json"
     if not path.is_file():
         raise HTTPException(404, "no results yet: run `mtrnn evaluate`, `mtrnn sweep` and `mtrnn report`")
     return FileResponse(path, media_type="application/json", headers={"Cache-Control": "no-cache"})
@@ -203,7 +191,7 @@ def results() -> FileResponse:
 
 @router.get("/api/results/figures/{name}")
 def result_figure(name: str) -> FileResponse:
-    path = (FIGURES_DIR / name).resolve()
-    if path.parent != FIGURES_DIR.resolve() or path.suffix != ".png" or not path.is_file():
+    path = (figures_dir() / name).resolve()
+    if path.parent != figures_dir().resolve() or path.suffix != ".png" or not path.is_file():
         raise HTTPException(404, f"no figure {name!r}")
     return FileResponse(path, media_type="image/png")

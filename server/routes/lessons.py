@@ -70,6 +70,7 @@ class LessonIndex(BaseModel):
     lessons: list[LessonInfo]
     model: str = Field(description="the served model")
     models: list[str] = Field(description="every model the app can serve")
+    modes: dict[str, str] = Field(description="training mode of each model (faithful, end_to_end, ...)")
     scenes: list[SceneChoice] = Field(description="corpus recordings, first variant of each scene")
 
 
@@ -121,7 +122,7 @@ class Speech(BaseModel):
 class Stage(BaseModel):
     key: str
     title: str
-    image: str = Field(description="PNG data URL")
+    image: str = Field(description="data URL: PNG for masks and edges, JPEG for colour pictures")
 
 
 class Seen(BaseModel):
@@ -209,6 +210,7 @@ def index(store: LessonsDep) -> LessonIndex:
         lessons=[LessonInfo(id=i, title=t) for i, t in L.LESSONS],
         model=store.served,
         models=store.model_names(),
+        modes=store.model_modes(),
         scenes=[
             SceneChoice(id=e.id, utterance=e.utterance, split=lm_split.split_of(e.id, e.scene.id))
             for e in firsts.values()

@@ -21,7 +21,7 @@ from model.end_to_end import (
     train_end_to_end,
 )
 from model.multimtrnn import ASSEMBLIES
-from model.training import prepare, train
+from model.training import MODES, available_modes, prepare
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 GRAMMAR = [s.utterance for s in all_scenes()]
@@ -143,10 +143,12 @@ def test_training_records_options_and_describes_through_the_model_path(tmp_path)
 
 
 def test_mode_is_registered_and_deterministic() -> None:
+    assert "end_to_end" in available_modes()
+    assert MODES["end_to_end"] is train_end_to_end
     data = tiny_corpus(variants=1)
-    config = tiny_config(epochs=2)
-    a = train(data, mode="end_to_end", config=config, seed=5)
-    b = train(data, mode="end_to_end", config=config, seed=5)
+    options = EndToEndOptions(auditory_epochs=2, perception_epochs=2, input_noise=0.1, vision_window=5)
+    a = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
+    b = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     for (name, x), (_, y) in zip(a.model.state_dict().items(), b.model.state_dict().items(), strict=True):
         assert torch.equal(x, y), name
 

@@ -2,14 +2,10 @@
 
 from __future__ import annotations
 
-import io
-import zipfile
 from collections.abc import Iterator
-from dataclasses import dataclass
-from pathlib import Path
 
 import pytest
-from explorer_artefacts import build_artefacts
+from explorer_artefacts import Exported, build_artefacts
 from fastapi.testclient import TestClient
 
 from data.corpus import export_recording, load_corpus
@@ -29,13 +25,6 @@ def client(settings: Settings) -> Iterator[TestClient]:
         yield c
 
 
-@dataclass(frozen=True)
-class Exported:
-    id: str
-    zip: Path
-    npz: Path
-
-
 @pytest.fixture(scope="session")
 def exported(settings: Settings, tmp_path_factory: pytest.TempPathFactory) -> Exported:
     """A corpus recording exported in format v1, as .zip and as .npz (what users upload)."""
@@ -43,11 +32,3 @@ def exported(settings: Settings, tmp_path_factory: pytest.TempPathFactory) -> Ex
     rec = export_recording(rid, 0)
     out = tmp_path_factory.mktemp("uploads")
     return Exported(rid, write_zip(rec, out / f"{rid}.zip"), write_npz(rec, out / f"{rid}.npz"))
-
-
-def zip_bytes(members: dict[str, bytes]) -> bytes:
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w") as archive:
-        for name, data in members.items():
-            archive.writestr(name, data)
-    return buf.getvalue()

@@ -8,6 +8,9 @@ meta.json says which recordings are their training set, as a trained model's doe
 
 from __future__ import annotations
 
+import io
+import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 from data.corpus import DEFAULT_PATH, build_corpus, load_corpus
@@ -44,3 +47,18 @@ def build_artefacts(root: Path) -> Settings:
         meta = {"mode": "untrained", "seed": seed, "ids": train, "lexicon": lexicon}
         save(model, root / "models" / name, meta)
     return Settings(models_dir=root / "models", corpus_path=corpus_path, viser=False)
+
+
+@dataclass(frozen=True)
+class Exported:
+    id: str
+    zip: Path
+    npz: Path
+
+
+def zip_bytes(members: dict[str, bytes]) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    return buf.getvalue()

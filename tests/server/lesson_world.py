@@ -14,8 +14,8 @@ import numpy as np
 
 from data import nao
 from data.scenario import ACTIONS, SHAPES, all_scenes, recording_id
-from model import checkpoint, metrics
-from model.encoding import proprioception, utterance, vision
+from model import checkpoint
+from model.encoding import proprioception
 from model.encoding.utterance import Lexicon
 from model.multimtrnn import MultiMTRNN
 from server.settings import Settings
@@ -77,33 +77,20 @@ def render(scene, frames: int = FRAMES) -> np.ndarray:  # noqa: ANN001 - a data.
 
 
 class WorldBackend(Backend):
-    """The app's Backend over the synthetic corpus (no data.corpus / data.camera needed)."""
+    """The app's Backend with the synthetic corpus in place of data/artefacts/corpus.npz."""
 
     def __init__(self, corpus: SimpleNamespace) -> None:
-        self._corpus_obj = corpus
-        self._nao, self._checkpoint, self._metrics = nao, checkpoint, metrics
-        self._proprioception, self._utterance, self._vision = proprioception, utterance, vision
-        self.recording_error = ValueError
-        self.max_upload_bytes = 64 * 1024 * 1024
-        self.joint_names = list(nao.JOINT_NAMES)
-        self.phoneme_labels = list(utterance.PHONEMES)
-        self.forward_kinematics = nao.forward_kinematics
-        self.lexicon = Lexicon.from_sentences([s.utterance for s in all_scenes()])
+        super().__init__()
+        self._world = corpus
 
     def load_corpus(self, path: Path | None) -> SimpleNamespace:
-        return self._corpus_obj
+        return self._world
 
     def export_recording(self, rid: str, seed: int = 0) -> SimpleNamespace:
-        entry = next(e for e in self._corpus_obj.entries if e.id == rid)
+        entry = next(e for e in self._world.entries if e.id == rid)
         return SimpleNamespace(
             frames=render(entry.scene), joints=entry.joints, fps=20.0, utterance=entry.utterance
         )
-
-    def describe(self, model, prop, vis):  # noqa: ANN001, ANN201 - as Backend.describe
-        return model.describe(prop, vis, self.lexicon)
-
-    def generate(self, model, c_a):  # noqa: ANN001, ANN201 - as Backend.generate
-        return model.generate_from_csc(c_a, self.lexicon)
 
 
 def build(root: Path) -> Settings:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import Exported, zip_bytes
+from explorer_artefacts import Exported, zip_bytes
 from fastapi.testclient import TestClient
 
 from data.corpus import load_corpus

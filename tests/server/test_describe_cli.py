@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import Exported
+from explorer_artefacts import Exported
 from fastapi.testclient import TestClient
 
 from server.cli import main

@@ -46,6 +46,7 @@ def test_index_lists_the_seven_lessons_the_models_and_one_recording_per_scene(cl
         "generalising",
     ]
     assert body["model"] == "faithful" and set(body["models"]) == {"faithful", "end-to-end"}
+    assert body["modes"] == {"faithful": "faithful", "end-to-end": "end_to_end"}
     assert len(body["scenes"]) == 64
     assert {s["split"] for s in body["scenes"]} == {"train", "test"}
 
@@ -135,7 +136,9 @@ def test_seeing_shows_every_stage_of_the_pipeline_on_a_corpus_frame(client: Test
         "contour",
         "rays",
     ]
-    assert all(s["image"].startswith("data:image/png;base64,") for s in body["stages"])
+    kinds = {s["key"]: s["image"].split(";", 1)[0] for s in body["stages"]}
+    assert kinds["original"] == "data:image/jpeg"
+    assert kinds["edges"] == kinds["object_mask"] == "data:image/png"
     assert body["found"] and len(body["features"]) == 21 and body["frames"] > 3
     assert body["features"][18] > body["features"][16]  # a blue object: B above R
 

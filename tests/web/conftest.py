@@ -1,7 +1,8 @@
 """A live explorer (uvicorn + viser in a thread) and a headless Debian chromium driven by Playwright.
 
 The app serves the shipped corpus and model when both exist (so the screenshots in docs/ show
-the real thing), else the test artefacts of tests/server/. Chromium is never downloaded: the
+the real thing; MTRNN_MODELS_DIR and MTRNN_CORPUS can point at others), else the test artefacts
+of tests/server/. Chromium is never downloaded: the
 tests use /usr/bin/chromium (`scripts/ensure-chromium` installs it) and skip without it.
 """
 
@@ -27,7 +28,6 @@ from server.settings import Settings  # noqa: E402
 from server.viewer import free_port  # noqa: E402
 
 CHROMIUM = Path("/usr/bin/chromium")
-SCREENSHOTS = Path(__file__).resolve().parents[2] / "docs" / "screenshots"
 CHROMIUM_ARGS = [
     "--no-sandbox",
     "--enable-unsafe-swiftshader",  # WebGL without a GPU (the 3D view)
@@ -40,9 +40,10 @@ CHROMIUM_ARGS = [
 
 @pytest.fixture(scope="session")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Settings:
-    shipped = Settings()
-    if DEFAULT_PATH.is_file() and (shipped.models_dir / shipped.model / "meta.json").is_file():
-        return dataclasses.replace(shipped, corpus_path=DEFAULT_PATH)
+    shipped = Settings.from_env()  # MTRNN_MODELS_DIR / MTRNN_CORPUS may point elsewhere
+    corpus = shipped.corpus_path or DEFAULT_PATH
+    if corpus.is_file() and (shipped.models_dir / shipped.model / "meta.json").is_file():
+        return dataclasses.replace(shipped, corpus_path=corpus)
     return build_artefacts(tmp_path_factory.mktemp("explorer-web"))
 
 
@@ -90,10 +91,3 @@ def page(browser, base_url: str) -> Iterator[object]:  # noqa: ANN001 - playwrig
     pg.errors = errors  # type: ignore[attr-defined]
     yield pg
     context.close()
-
-
-def shoot(page, name: str) -> Path:  # noqa: ANN001
-    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
-    path = SCREENSHOTS / f"{name}.png"
-    page.screenshot(path=str(path), full_page=True)
-    return path

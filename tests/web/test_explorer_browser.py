@@ -12,7 +12,7 @@ import re
 import httpx
 import numpy as np
 import pytest
-from conftest import shoot
+from browser_helpers import shoot
 from PIL import Image
 
 from data.corpus import export_recording
@@ -20,8 +20,13 @@ from data.recording import write_zip
 
 pytestmark = pytest.mark.browser
 
-PAGES = {"scenes": "Scenes", "upload": "Upload a recording", "csc": "Csc spaces",
-         "latent": "Latent explorer", "glossary": "Glossary"}  # fmt: skip
+PAGES = {
+    "scenes": "Scenes",
+    "upload": "Upload a recording",
+    "csc": "Csc spaces",
+    "latent": "Latent explorer",
+    "glossary": "Glossary",
+}
 
 
 # the "?" button of a control: inside the same labelled field (or the upload drop zone)
@@ -47,7 +52,7 @@ def test_every_page_opens_with_help_on_its_controls(page, route: str) -> None:  
             assert control.locator(HELP_NEXT_TO_CONTROL).count() >= 1, control.evaluate("e => e.outerHTML")
     assert page.locator("#nav a").count() >= 5
     assert not page.errors  # type: ignore[attr-defined]
-    shoot(page, f"page-{route}")
+    shoot(page, f"page-{route}", full_page=route != "scenes")  # 256 rows: the first screen is enough
 
 
 def test_help_button_explains_and_links_to_the_glossary(page) -> None:  # noqa: ANN001
@@ -101,8 +106,9 @@ def test_scene_view_is_addressable_by_time_and_overlay(page, base_url: str) -> N
 def test_upload_an_exported_recording_through_the_file_input(page, base_url: str, tmp_path) -> None:  # noqa: ANN001
     scene = first_scene(base_url)
     path = write_zip(export_recording(scene["id"], 0), tmp_path / f"{scene['id']}.zip")
-    api = httpx.post(f"{base_url}/api/describe", files={"recording": (path.name, path.read_bytes())},
-                     timeout=120).json()  # fmt: skip
+    api = httpx.post(
+        f"{base_url}/api/describe", files={"recording": (path.name, path.read_bytes())}, timeout=120
+    ).json()
     page.goto("/#/upload")
     page.locator("#recording-file").set_input_files(str(path))
     said = page.locator("#upload-utterance")
@@ -165,8 +171,24 @@ def test_click_the_latent_plane_and_read_the_generated_text(page, base_url: str)
         "!['click the plane', '…'].includes(document.querySelector('#latent-utterance').textContent)"
     )
     params = dict(p.split("=") for p in page.url.split("?")[1].split("&"))
-    api = httpx.post(f"{base_url}/api/csc/generate", json={"point": [float(params["x"]), float(params["y"])]},
-                     timeout=60).json()  # fmt: skip
+    api = httpx.post(
+        f"{base_url}/api/csc/generate", json={"point": [float(params["x"]), float(params["y"])]}, timeout=60
+    ).json()
     assert said.inner_text() == (api["utterance"] or "(silence)")
     assert page.locator("#latent-history li").count() == 1
     shoot(page, "latent")
+
+
+def test_the_header_switches_the_served_model(page, base_url: str) -> None:  # noqa: ANN001
+    models = httpx.get(f"{base_url}/api/models", timeout=30).json()
+    if len(models["models"]) < 2:
+        pytest.skip("only one model is shipped")
+    other = next(m["name"] for m in models["models"] if not m["selected"])
+    page.goto("/#/scenes")
+    try:
+        with page.expect_response(lambda r: r.url.endswith("/api/models/selected") and r.ok):
+            page.locator("#model").select_option(other)
+        assert httpx.get(f"{base_url}/api/health", timeout=30).json()["model"] == other
+        page.locator("#scene-count").wait_for()  # the page was rendered again
+    finally:
+        httpx.put(f"{base_url}/api/models/selected", json={"name": models["selected"]}, timeout=60)

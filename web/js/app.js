@@ -7,8 +7,8 @@
 // and ctx.setParams({...}) rewrites the URL without re-rendering (views stay addressable).
 // Adding a page is adding a file: GET /api/pages lists web/pages/*.js.
 
-import { get } from "./api.js";
-import { h, errorBox } from "./dom.js";
+import { get, put } from "./api.js";
+import { h, errorBox, help } from "./dom.js";
 
 const pages = new Map();
 let cleanup = null;
@@ -66,11 +66,31 @@ async function render() {
   }
 }
 
+// The served model, switchable: every later answer (describe, Csc, generate) comes from it.
+async function modelSelector() {
+  const { selected, models } = await get("/api/models");
+  const select = h("select", { id: "model", "aria-label": "served model" },
+    models.map((m) => h("option", { value: m.name, selected: m.name === selected },
+      `${m.name}${m.meta.mode ? ` (${m.meta.mode})` : ""}`)));
+  select.addEventListener("change", async () => {
+    select.disabled = true;
+    try {
+      await put("/api/models/selected", { name: select.value });
+      await render();
+    } catch (e) {
+      document.getElementById("app").prepend(errorBox(e.message));
+    } finally {
+      select.disabled = false;
+    }
+  });
+  document.getElementById("model-badge").replaceChildren("model ", select,
+    help("The trained MultiMTRNN that answers: each is a checkpoint in data/artefacts/models (weights + meta.json). Switching it changes every description, Csc plot and generation.", null));
+}
+
 async function start() {
   try {
     await loadPages();
-    const health = await get("/api/health");
-    document.getElementById("model-badge").textContent = `model: ${health.model}`;
+    await modelSelector();
   } catch (e) {
     document.getElementById("app").replaceChildren(errorBox(`The server did not answer: ${e.message}`));
     return;

@@ -61,6 +61,8 @@ export function errorBox(message) {
   return h("div", { class: "error", role: "alert" }, message);
 }
 
+// Fixed decimals for ordinary numbers, significant digits for tiny ones (untrained Csc are ~1e-4).
 export function fmt(x, digits = 3) {
-  return Number(x).toFixed(digits);
+  const v = Number(x);
+  return v === 0 || Math.abs(v) >= 0.01 ? v.toFixed(digits) : v.toPrecision(digits);
 }

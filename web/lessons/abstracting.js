@@ -4,7 +4,7 @@
 import { get, post } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { plotly, CONFIG, baseLayout } from "../js/plots.js";
-import { control, controls, equation, tryThis, slider, select, num } from "./common.js";
+import { control, controls, equation, tryThis, slider, select, num, hiddenSet } from "./common.js";
 
 const PSIS = [0, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2];
 const SEQ_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"];
@@ -33,18 +33,18 @@ export async function render(root, ctx) {
     h("div", { class: "lesson-text" },
       h("p", {}, "How can a network find a concept for a sequence without being told what the concept is? The paper's MTRNN with context abstraction reads a sequence and ends with a pattern c_T in its slowest (Csc) units. Training pulls the network towards target patterns, but the targets themselves move too: a small share ψ of the error moves the targets, the rest (1 − ψ) trains the weights. This is self-organisation forcing."),
       equation("∂E/∂z_T,i = (1 − ψ) (y_T,i − f(c_T,i + b_i)) f′(z_T,i)     c_T,i ← c_T,i − ψ ζ_i ∂E/∂c_T,i", "eqs. (11)-(12)"),
-      h("p", {}, "The test of 3.2.2: four sequences of two contrary cosines (33 steps) that differ only in phase; two Csc units, so the four concepts are points in a plane. Run it for a ψ: filled dots are the network's abstraction of each sequence, rings are the moving targets. How well spread they end up is measured by d_avg (mean distance) and d_rel (geometric mean of distance / d_avg: 1 when all distances are equal; four points in a plane can reach at most 0.986)."),
+      h("p", {}, "The test of 3.2.2: four sequences of two contrary cosines (33 steps) that differ only in phase; two Csc units, so the four concepts are points in a plane. Run it for a ψ: filled dots are the network's abstraction of each sequence (its Csc internal states at the last step), rings are the moving targets c_T (the network is pulled towards c_T plus its bias b, so dots settle near, not on, the rings). How well spread they end up is measured by d_avg (mean distance) and d_rel (geometric mean of distance / d_avg: 1 when all distances are equal; four points in a plane can reach at most 0.986)."),
       equation("d_avg = mean over pairs of ‖c_k − c_l‖,     d_rel = ( Π_pairs ‖c_k − c_l‖ / d_avg )^(1 / #pairs)", "eqs. (13)-(15)")),
     controls(
       control(ctx, "psi", "ψ", psi, "Self-organisation forcing: the share of the error that moves the targets c_T. The paper finds 5e-5 best for this task.", "psi"), psiValue,
       control(ctx, "seed", "seed", seed, "Initialisation of the network and the random starting targets (same seed, same start).", null),
-      h("span", { class: "field", dataset: { control: "run" } }, run), progress, status),
+      h("span", { class: "field", dataset: { control: "run" }, hidden: hiddenSet(ctx).has("run") }, run), progress, status),
     error, readout,
     h("div", { class: "grid2" }, plot,
       h("section", { class: "panel" }, h("h2", {}, "Your runs"),
         h("table", { class: "lesson-table" }, h("thead", {}, h("tr", {}, ["ψ", "seed", "epochs", "d_avg", "d_rel", "targets d_rel"].map((x) => h("th", {}, x)))), history))),
     sweepBox,
-    tryThis("Run ψ = 0 and then ψ = 1e-2 with the same seed. Which ends with the targets better spread (targets d_rel), and which needed fewer epochs? What does ψ = 0 mean for the targets?",
+    tryThis(ctx, "Run ψ = 0 and then ψ = 1e-2 with the same seed. Which ends with the targets better spread (targets d_rel), and which needed fewer epochs? What does ψ = 0 mean for the targets?",
       () => {
         if (!done.length) return [h("p", {}, "Run the experiment at least once first.")];
         const rows = done.map((r) => `ψ = ${num(r.psi)}: ${r.result.epochs} epochs, d_rel ${num(r.result.d_rel)}, targets d_rel ${num(r.result.target_d_rel)}`);
@@ -67,7 +67,7 @@ export async function render(root, ctx) {
     const trails = [0, 1, 2, 3].map((k) => ({
       x: frames.map((f) => f.points[k][0]), y: frames.map((f) => f.points[k][1]), mode: "lines", showlegend: false,
       line: { color: SEQ_COLOURS[k], width: 1 }, opacity: 0.5, hoverinfo: "skip" }));
-    const targets = { x: last.targets.map((p) => p[0]), y: last.targets.map((p) => p[1]), mode: "markers", name: "targets c_T",
+    const targets = { x: last.targets.map((p) => p[0]), y: last.targets.map((p) => p[1]), mode: "markers", name: "targets c_T (the net aims at c_T + b, eq. 11)",
       marker: { size: 16, color: "rgba(0,0,0,0)", line: { width: 2, color: SEQ_COLOURS } } };
     const points = { x: last.points.map((p) => p[0]), y: last.points.map((p) => p[1]), mode: "markers+text", name: "abstracted c_T",
       text: ["phase 0", "phase π/2", "phase π", "phase 3π/2"], textposition: "top center",
@@ -77,13 +77,16 @@ export async function render(root, ctx) {
       title: { text: `Csc space, epoch ${last.epoch}`, font: { size: 13 } },
       xaxis: { title: { text: "Csc unit 1 (internal state)" }, range }, yaxis: { title: { text: "Csc unit 2" }, range, scaleanchor: "x" },
       legend: { orientation: "h", y: -0.15 } }), CONFIG);
-    readout.replaceChildren(
-      h("span", {}, "epoch ", h("b", { id: "epoch" }, last.epoch)),
-      h("span", {}, "error ", h("b", {}, num(last.error, 6))),
-      h("span", {}, "d_avg ", h("b", { id: "d-avg" }, num(last.d_avg, 4))),
-      h("span", {}, "d_rel ", h("b", { id: "d-rel" }, num(last.d_rel, 4))),
-      h("span", {}, "targets: d_avg ", h("b", {}, num(last.target_d_avg, 4)), ", d_rel ", h("b", {}, num(last.target_d_rel, 4))),
-      result ? h("span", { class: result.converged ? "ok" : "bad" }, result.converged ? `converged after ${result.epochs} epochs` : "stopped before converging") : null);
+    // while running: the latest snapshot; when done: the final abstraction (after the last epoch)
+    const m = result ? { epoch: result.epochs, d_avg: result.d_avg, d_rel: result.d_rel, target_d_avg: result.target_d_avg, target_d_rel: result.target_d_rel } : last;
+    readout.replaceChildren(...[
+      h("span", {}, result ? "final, epoch " : "epoch ", h("b", { id: "epoch" }, m.epoch)),
+      result ? null : h("span", {}, "error ", h("b", {}, num(last.error, 6))),
+      h("span", {}, "d_avg ", h("b", { id: "d-avg" }, num(m.d_avg, 4))),
+      h("span", {}, "d_rel ", h("b", { id: "d-rel" }, num(m.d_rel, 4))),
+      h("span", {}, "targets: d_avg ", h("b", {}, num(m.target_d_avg, 4)), ", d_rel ", h("b", {}, num(m.target_d_rel, 4))),
+      result ? h("span", { class: result.converged ? "ok" : "bad" }, result.converged ? `converged after ${result.epochs} epochs` : `stopped at the live limit of ${result.epochs} epochs before converging`) : null,
+    ].filter(Boolean));
   }
 
   async function poll() {

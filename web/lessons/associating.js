@@ -32,13 +32,13 @@ export async function render(root, ctx, index) {
       control(ctx, "by", "colour by", colourBy, "Colour the dots by the scene's action, object colour or shape.", "PCA")),
     error, said,
     h("div", { class: "grid3" }, plots),
-    tryThis("Pick a scene the model describes correctly, then mute vision. Which words survive? Then mute proprioception instead.",
+    tryThis(ctx, "Pick a scene the model describes correctly, then mute vision. Which words survive? Then mute proprioception instead.",
       () => {
         if (!data) return [h("p", {}, "Wait for the spaces to load.")];
         const lost = Object.entries(data.slots).filter(([, v]) => v.said !== v.expected).map(([k]) => k);
         return [
           h("p", {}, `With ${data.mute === "none" ? "nothing" : data.mute} muted the model says “${data.said || "(silence)"}” for “${data.expected}”: ${lost.length ? `the ${lost.join(", ")} slot${lost.length > 1 ? "s are" : " is"} wrong or missing` : "every slot is right"}.`),
-          h("p", {}, "Muting vision takes away what the object looks like: the action (from the arm) tends to survive while colour and shape become a guess, typically the most common or the nearest learned object. Muting proprioception does the reverse. Neither sense alone holds the whole sentence; the assemblies hold it only because both contexts arrive together. That is where ambiguity is resolved: in c_a,0, not in either sense."),
+          h("p", {}, "What to expect from the paper (4.1, 4.4): vision carries colour and shape but no motion, proprioception carries the action but is mostly ambiguous about the object. So with vision muted the action word should survive while colour and shape become a guess, and the reverse with proprioception muted. Neither sense holds the whole sentence; only the association of both contexts in c_a,0 does. That is where the ambiguity of each sense is resolved. Check it against the slots above: a poorly trained model may not follow the script."),
         ];
       }));
 
@@ -49,7 +49,8 @@ export async function render(root, ctx, index) {
     ["s", "v", "a"].forEach((space, k) => {
       const sp = data.spaces[space];
       const traces = groups.map((g) => {
-        const idx = data.labels.map((l, i) => (l[by] === g ? i : -1)).filter((i) => i >= 0);
+        const idx = data.labels.map((l, i) => (l[by] === g ? i : -1)).filter((i) => i >= 0)
+          .sort((i, j) => (data.labels[i].split === "test") - (data.labels[j].split === "test")); // legend shows a filled dot
         return { x: idx.map((i) => sp.x[i]), y: idx.map((i) => sp.y[i]), mode: "markers", name: g, showlegend: k === 0, legendgroup: g,
           text: idx.map((i) => `${data.labels[i].id} (${data.labels[i].split})`), hoverinfo: "text",
           marker: { size: 7, color: palette[g], opacity: 0.75, symbol: idx.map((i) => (data.labels[i].split === "test" ? "circle-open" : "circle")) } };
@@ -62,8 +63,8 @@ export async function render(root, ctx, index) {
       }
       Plotly.react(plots[k], traces, baseLayout({
         title: { text: `${TITLES[space]}`, font: { size: 13 } },
-        xaxis: { title: { text: `PC1 (${Math.round(100 * sp.explained[0])} %)` }, zeroline: false },
-        yaxis: { title: { text: `PC2 (${Math.round(100 * (sp.explained[1] ?? 0))} %)` }, zeroline: false },
+        xaxis: { title: { text: `PC1 (${(100 * sp.explained[0]).toFixed(1)} %)` }, zeroline: false },
+        yaxis: { title: { text: `PC2 (${(100 * (sp.explained[1] ?? 0)).toFixed(1)} %)` }, zeroline: false },
         legend: { orientation: "h", y: -0.3 }, margin: { l: 55, r: 10, t: 30, b: 50 } }), CONFIG);
     });
   }
@@ -73,13 +74,14 @@ export async function render(root, ctx, index) {
       const v = data.slots[k];
       return h("span", { class: v.said === v.expected ? "ok" : "bad" }, `${k}: ${v.said ?? "?"}`);
     };
-    said.replaceChildren(
+    said.replaceChildren(...[
       h("div", { class: "said" }, h("span", { class: "label" }, "teacher said"), h("q", {}, data.expected)),
       h("div", { class: "said" }, h("span", { class: "label" }, "model says (both senses)"), h("q", { id: "said-unmuted" }, data.unmuted || "(silence)")),
       h("div", { class: "said big" }, h("span", { class: "label" }, data.mute === "none" ? "model says" : `model says with ${data.mute} muted`),
         h("q", { id: "said-muted" }, data.said || "(silence)"), " ", slot("action"), " ", slot("colour"), " ", slot("object")),
-      data.mute === "none" ? null : h("div", { class: "small" }, "muting moved c_a,0 by ", h("b", { id: "moved" }, num(data.moved, 4)), " in the 12-unit auditory Csc space"),
-      h("div", { class: "muted small" }, `nearest corpus pattern in c_a,0: ${data.nearest.id} (the model says “${data.nearest.said}” there) · model ${data.model} · open dots: test scenes`));
+      data.mute === "none" ? null : h("div", { class: "small" }, "muting moved c_a,0 by ", h("b", { id: "moved" }, num(data.moved, 4)), " in the auditory Csc space"),
+      h("div", { class: "muted small" }, `nearest corpus pattern in c_a,0: ${data.nearest.id} (the model says “${data.nearest.said || "(silence)"}” there) · model ${data.model} · open dots: test scenes`),
+    ].filter(Boolean));
   }
 
   const load = latest(async () => {

@@ -24,10 +24,11 @@ export function equation(text, tag) {
   return h("div", { class: "eq" }, tag ? h("span", { class: "tag" }, tag) : null, text);
 }
 
-// "Try this": the question, and the answer (built when asked, from the live numbers) on demand.
-export function tryThis(question, answer) {
+// "Try this": the question, and the answer (built when asked, from the live numbers) on demand;
+// ?hide=answer removes the button (a test for the class).
+export function tryThis(ctx, question, answer) {
   const box = h("div", { class: "answer", hidden: true });
-  const button = h("button", { type: "button", class: "reveal" }, "Show the answer");
+  const button = h("button", { type: "button", class: "reveal", hidden: hiddenSet(ctx).has("answer") }, "Show the answer");
   button.addEventListener("click", () => {
     const open = box.hidden;
     box.replaceChildren(...[].concat(open ? answer() : []));

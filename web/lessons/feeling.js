@@ -40,12 +40,12 @@ export async function render(root, ctx) {
     error,
     h("div", { class: "grid-plot" }, plot, h("section", { class: "panel" }, h("h2", {}, "3D arm"), iframe, viewerNote)),
     table,
-    tryThis("Is a push on the red apple closer, for the arm, to a push on the blue phone or to a pull on the red apple? And for the eyes?",
+    tryThis(ctx, "For the chosen action: is it on the red apple closer, for the arm, to the same action on the blue phone, or to another action on the same red apple? And for the eyes?",
       () => {
         if (!data || !data.comparison) return [h("p", {}, "This needs the red apple and the blue phone in the corpus.")];
         const [same, other] = data.comparison.rows;
         return [
-          h("p", {}, `For the joints the two objects under the same action differ by ${num(same.joints_rms)} (RMS, joint units in [0, 1]) while the two actions on the same object differ by ${num(other.joints_rms)}; in the somatosensory context c_s,T the distances are ${num(same.c_s)} and ${num(other.c_s)}. For vision it is the other way round: c_v,T distances ${num(same.c_v)} (different object) and ${num(other.c_v)} (same object).`),
+          h("p", {}, `Comparing ${same.pair} with ${other.pair}: for the joints the two objects under the same action differ by ${num(same.joints_rms)} (RMS, joint units in [0, 1]) while the two actions on the same object differ by ${num(other.joints_rms)}; in the somatosensory context c_s,T the distances are ${num(same.c_s)} and ${num(other.c_s)}. For vision it is the other way round: c_v,T distances ${num(same.c_v)} (different object) and ${num(other.c_v)} (same object).`),
           h("p", {}, "Touch tells the action, not the object; sight tells the object, not the action. Neither sense alone can say “push the red apple”; lesson 6 shows the cell assemblies putting the two halves together."),
         ];
       }));
@@ -64,7 +64,9 @@ export async function render(root, ctx) {
     cursor = new Cursor(series.id, duration, series.fps, (s) => {
       if (Math.abs(Number(time.value) - s.t) > 1e-3) { time.value = s.t; drawCursor(); }
     });
-    cursor.connect(Math.min(Number(time.value), duration)).then((live) => {
+    const t0 = Math.min(Number(time.value), duration);
+    cursor.connect(t0).then((live) => {
+      if (live) cursor.seek(t0); // keep the page's cursor when the 3D view switches recordings
       viewerNote.textContent = live ? `replaying ${series.id}; the panel's own play controls move the cursor too` : "the 3D viewer is not running in this server (MTRNN_VISER=0): the cursor is local";
     });
   }

@@ -25,7 +25,7 @@ export async function render(root, ctx, index) {
 
   root.append(
     h("div", { class: "lesson-text" },
-      h("p", {}, "The robot does not see pixels the way we do: its camera frame is reduced to 19 numbers. Mean shift (Comaniciu & Meer) flattens the picture into patches of similar colour; the most saturated patch that does not touch the border (the arm enters from there) is the object; Canny edges cut it from its neighbours; the contour finder traces its outline. From the centre of mass, the largest distance to the contour in each of 16 sectors of 22.5° describes the shape (scaled by the square root of the area, largest first: invariant to size and roughly to rotation), and the mean R, G, B inside it the colour. The centroid is kept apart."),
+      h("p", {}, "The robot does not see pixels the way we do: its camera frame is reduced to 19 numbers. Mean shift (Comaniciu & Meer) flattens the picture into patches of similar colour; the most saturated sizeable patch is taken for the object (patches touching the border, where the arm enters, count for less); Canny edges cut it from its neighbours; the contour finder traces its outline. From the centre of mass, the largest distance to the contour in each of 16 sectors of 22.5° describes the shape (scaled by the square root of the area, largest first: invariant to size and roughly to rotation), and the mean R, G, B inside it the colour. The centroid is kept apart."),
       h("p", {}, "Move through the frames of a recording, change the mean-shift colour window, or upload a picture of your own.")),
     controls(
       control(ctx, "scene", "recording", scene, "A corpus recording; its camera frames are re-rendered from their seed.", "vision features"),
@@ -33,12 +33,12 @@ export async function render(root, ctx, index) {
       control(ctx, "radius", "colour window", radius, "Mean-shift colour radius: larger merges more colours into one patch (the pipeline's default is 24).", "vision features"), radiusValue,
       control(ctx, "upload", "or your picture", file, "A PNG or JPEG: the same pipeline runs on it.", null)),
     error, info, stages, bars,
-    tryThis("Compare an apple and a banana of the same colour (pick the two recordings, same frame). Which of the 19 bars change, and which stay the same? Then compare a red and a blue apple.",
+    tryThis(ctx, "Compare an apple and a banana of the same colour (pick the two recordings, same frame). Which of the 19 bars change, and which stay the same? Then compare a red and a blue apple.",
       () => {
         if (!seen) return [h("p", {}, "Wait for the pipeline to run.")];
         const f = seen.features;
         return [
-          h("p", {}, `For the frame shown, the 16 shape bars run from ${num(Math.max(...f.slice(0, 16)))} (the longest ray, always first) down to ${num(Math.min(...f.slice(0, 16)))}; the colour is R ${num(f[16])}, G ${num(f[17])}, B ${num(f[18])}.`),
+          h("p", {}, `For the frame shown (${seen.source}), the 16 shape bars range from ${num(Math.max(...f.slice(0, 16)))} down to ${num(Math.min(...f.slice(0, 16)))}, starting at the longest ray (or one within 8 % of it); the colour is R ${num(f[16])}, G ${num(f[17])}, B ${num(f[18])}.`),
           h("p", {}, "Shape and colour live in separate bars: a banana's long, curved outline gives a steep fall-off from its longest ray, an apple's round one a flat profile, whatever their colour; a red and a blue apple share the shape bars and differ only in R, G, B. Nothing here says what the arm is doing: the vision features are static on purpose, so vision alone cannot tell a push from a pull (lesson 4 shows the other side)."),
         ];
       }));
@@ -55,7 +55,7 @@ export async function render(root, ctx, index) {
       x: seen.feature_names, y: seen.features, type: "bar",
       marker: { color: seen.feature_names.map((name, i) => (i < 16 ? "#3056a0" : i < 19 ? ["#d22828", "#28aa46", "#2858dc"][i - 16] : "#bbb")) },
     }], baseLayout({ title: { text: `the ${seen.paper_features} features MTRNN_v reads (grey: centroid, kept apart)`, font: { size: 13 } },
-      yaxis: { range: [0, 1] }, xaxis: { tickangle: -45, range: [-0.5, n - 0.5] } }), CONFIG);
+      yaxis: { range: [0, 1] }, xaxis: { tickangle: -45, range: [-0.5, n - 0.5] }, margin: { l: 50, r: 10, t: 30, b: 75 } }), CONFIG);
   }
 
   const load = latest(async () => {
@@ -74,8 +74,9 @@ export async function render(root, ctx, index) {
     draw();
   }, 80);
 
-  scene.addEventListener("change", () => { uploaded = null; frame.value = 0; load(); });
-  frame.addEventListener("input", () => { uploaded = null; load(); });
+  const backToCorpus = () => { uploaded = null; file.value = ""; };
+  scene.addEventListener("change", () => { backToCorpus(); frame.value = 0; load(); });
+  frame.addEventListener("input", () => { backToCorpus(); load(); });
   radius.addEventListener("input", load);
   file.addEventListener("change", () => { if (file.files.length) { uploaded = file.files[0]; load(); } });
   load();

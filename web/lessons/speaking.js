@@ -36,7 +36,7 @@ export async function render(root, ctx) {
       control(ctx, "nu", "ν", params.nu, "Steps between two phonemes.", null), values.nu),
     error, out,
     h("div", { class: "grid2" }, spikePlot, softPlot),
-    tryThis("Type “the bookkeeper.”: its K K is the same phoneme twice in a row. With the paper's constants (γ = 4, ω = 4, σ² = 0.3, ν = 2) the decoder reads both K's. Now set ν to 1, or σ² to 2. What happens, and why?",
+    tryThis(ctx, "Type “the bookkeeper.”: its K K is the same phoneme twice in a row. With the paper's constants (γ = 4, ω = 4, σ² = 0.3, ν = 2) the decoder reads both K's. Now set ν to 1, or σ² to 2. What happens, and why?",
       () => {
         if (!speech) return [h("p", {}, "Wait for the plots to load.")];
         const p = speech.params;

@@ -11,6 +11,11 @@ function parse() {
 }
 
 async function show() {
+  const route = location.hash.replace(/^#\/?/, "").split(/[/?]/)[0];
+  if (route && route !== "lessons") { // e.g. a "?" button's glossary link: the app's own pages
+    location.href = `/${location.hash}`;
+    return;
+  }
   if (cleanup) { try { cleanup(); } catch (e) { console.error(e); } cleanup = null; }
   const root = document.getElementById("app");
   root.replaceChildren();

@@ -40,13 +40,13 @@ export async function render(root, ctx, index) {
       timeValue, h("span", { class: "field" }, "producing ", phonemeNow)),
     saidReadout, speedReadout, error,
     h("div", { class: "grid3" }, layerPlots),
-    tryThis("Set τ to 70, the timescale of MTRNN_a's Cs layer. How many steps does the unit need to forget half of the pulse, and how does that compare with the length of an utterance? Then compare how fast the three real layers change.",
+    tryThis(ctx, "Set τ to 70, the timescale of MTRNN_a's Cs layer. How many steps does the unit need to forget half of the pulse, and how does that compare with the length of an utterance? Then compare how fast the three real layers change.",
       () => {
         if (!pulse || !activity) return [h("p", {}, "Wait for the plots to load.")];
         const L = activity.layers;
         return [
           h("p", {}, `At τ = ${pulse.tau} the half-life is ${num(pulse.half_life_steps, 1)} steps and ${num(100 * pulse.left_after_20_steps, 0)} % of the charge is still there 20 steps after the pulse. An utterance here lasts ${activity.steps} steps, so a τ = 70 unit keeps what it was set to for the whole sentence: it is a context, not a detail.`),
-          h("p", {}, `In the real network the mean change per step is IO ${num(L.IO.speed, 4)}, Cf ${num(L.Cf.speed, 4)}, Cs ${num(L.Cs.speed, 4)}: the slower the timescale, the slower the layer. This is the hierarchy the paper relies on: slow units hold the concept, fast units spell it out.`),
+          h("p", {}, `In the model served now (${activity.model}) the mean change per step is IO ${num(L.IO.speed, 4)}, Cf ${num(L.Cf.speed, 4)}, Cs ${num(L.Cs.speed, 4)}; from fastest to slowest: ${["IO", "Cf", "Cs"].sort((a, b) => L[b].speed - L[a].speed).join(", ")}. Whatever the weights, eq. (3) caps how fast a unit can move: at most 1/τ of the way per step. In a trained network the layers use that room as the paper describes: IO switches with every phoneme, Cs holds the concept of the sentence. (An untrained network barely moves at all, so its order says little.)`),
         ];
       }));
 

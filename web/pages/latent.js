@@ -36,8 +36,9 @@ export async function render(root, ctx) {
   await Plotly.newPlot(plot, [corpus, probe], baseLayout({ height: 560, hovermode: "closest", showlegend: false, dragmode: false,
     xaxis: { title: "PC1", range: pad(xs), zeroline: false }, yaxis: { title: "PC2", range: pad(ys), zeroline: false } }), CONFIG);
 
-  async function speak(x, y) {
-    ctx.setParams({ x: x.toFixed(4), y: y.toFixed(4) });
+  async function speak(px, py) {
+    const x = +px.toPrecision(6), y = +py.toPrecision(6); // what the URL keeps
+    ctx.setParams({ x: String(x), y: String(y) });
     Plotly.restyle(plot, { x: [[x]], y: [[y]] }, [1]);
     said.textContent = "…";
     try {

@@ -1,0 +1,82 @@
+"""The report: tables beside the paper's numbers, figures and the web page's data, from the store."""
+
+from __future__ import annotations
+
+import json
+
+from model.report import PAPER, build_report
+from model.runstore import RunSpec, RunStore
+
+
+def _metrics(f1_train: float, f1_test: float) -> dict:
+    split = lambda f1: {"f1": f1, "edit_distance": 1 - f1, "sentence_exact": f1 / 2, "word_accuracy": f1}  # noqa: E731
+    return {
+        "train": split(f1_train),
+        "test": split(f1_test),
+        "mixed": {k: (split(f1_train)[k] + split(f1_test)[k]) / 2 for k in split(0)},
+    }
+
+
+def _store(tmp_path) -> RunStore:
+    store = RunStore(tmp_path / "runs")
+    numbers = {"faithful": [(0.9, 0.2), (0.8, 0.3)], "end_to_end": [(1.0, 0.9), (1.0, 0.95)]}
+    for mode, runs in numbers.items():
+        for fold, (train, test) in enumerate(runs):
+            spec = RunSpec("evaluate", mode, fold, 0, fold, {"training": {"epochs_auditory": 10}}, {}, "d")
+            store.register([spec])
+            store.finish(spec.key, _metrics(train, test), 1.0)
+    for psi, shift in ((1e-4, 0.0), (5e-4, 0.1)):
+        for fold in range(2):
+            spec = RunSpec(
+                "psi_s", "faithful", fold, 0, fold, {"training": {"psi_s": psi}}, {"psi_s": psi}, "d"
+            )
+            store.register([spec])
+            m = _metrics(0.8 + shift, 0.2 + shift)
+            m["train"].update(
+                {
+                    "csc.somatosensory.d_avg": 1.0 - shift,
+                    "csc.somatosensory.d_rel": 0.9,
+                    "csc.somatosensory.d_inter": 0.6 - shift,
+                    "csc.somatosensory.d_intra": 0.5,
+                }
+            )
+            store.finish(spec.key, m, 1.0)
+    return store
+
+
+def test_the_report_puts_our_numbers_beside_the_papers_and_explains_each_difference(tmp_path) -> None:
+    store = _store(tmp_path)
+    out = tmp_path / "docs" / "RESULTS.md"
+    report = build_report(store, out, tmp_path / "docs" / "figures", commands=["mtrnn evaluate ..."])
+    text = out.read_text()
+    assert "| train F1 (mean) | 0.952 | 0.8500 | 1.0000 |" in text
+    assert "| test F1 (best run) | 0.638 | 0.3000 | 0.9500 |" in text
+    assert "faithful test f1: 0.250, 0.031 worse than the paper's 0.281" in text
+    assert "end_to_end test f1: 0.925, 0.644 better than the paper's 0.281" in text
+    # one sentence per (mode, split, measure): 7 explained differences, 1 within 0.02 of the paper
+    assert text.count("most likely because") == 7
+    assert "end_to_end train edit_distance: 0.000, within 0.02 of the paper's 0.0185." in text
+    assert "| 0.0005 | 0.600 |" in text  # psi_s table: mixed F1 at 5e-4
+    assert "best psi_s by mixed F1 is 0.0005" in text
+    assert "mtrnn evaluate ..." in text
+    names = {p.name for p in report.figures}
+    assert names == {"modes.png", "fig9_psi_s.png"}
+    assert all(p.stat().st_size > 10_000 for p in report.figures)
+    data = json.loads((tmp_path / "docs" / "figures" / "results.json").read_text())
+    assert data["paper"] == PAPER and data["modes"]["faithful"]["runs"] == 2
+    assert [r["psi_s"] for r in data["psi_s"]] == [1e-4, 5e-4]
+
+
+def test_an_empty_store_gives_a_report_that_says_so(tmp_path) -> None:
+    out = tmp_path / "RESULTS.md"
+    build_report(RunStore(tmp_path / "runs"), out, tmp_path / "figures")
+    assert "No finished runs" in out.read_text()
+
+
+def test_runs_of_different_budgets_are_never_mixed_in_one_row(tmp_path) -> None:
+    store = _store(tmp_path)
+    extra = RunSpec("evaluate", "faithful", 0, 0, 0, {"training": {"epochs_auditory": 99}}, {}, "d")
+    store.register([extra])
+    store.finish(extra.key, _metrics(0.0, 0.0), 1.0)  # one run of another budget: left out
+    text = build_report(store, tmp_path / "R.md", tmp_path / "fig").markdown
+    assert "faithful (2 folds × 1 inits = 2 runs)" in text and "| train F1 (mean) | 0.952 | 0.8500 |" in text

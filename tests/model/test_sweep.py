@@ -1,0 +1,103 @@
+"""Sweeps: paired designs over psi, and the Fig. 9 / Fig. 3 tables with means and standard errors."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from model.protocol import default_config
+from model.runstore import RunRecord
+from model.sweep import (
+    COSINE_RUNNER,
+    cosine_run,
+    cosine_specs,
+    cosine_table,
+    mean_sem,
+    psi_s_specs,
+    psi_s_table,
+)
+
+
+def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None:
+    specs = psi_s_specs([1e-4, 5e-4], "faithful", folds=2, inits=2, config=default_config(), digest="d")
+    assert len(specs) == 8
+    by_value = {}
+    for s in specs:
+        assert s.config["training"]["psi_s"] == s.params["psi_s"]
+        by_value.setdefault(s.params["psi_s"], []).append((s.fold, s.init, s.seed))
+    assert by_value[1e-4] == by_value[5e-4]
+    assert len({s.key for s in specs}) == 8
+
+
+@pytest.mark.slow
+def test_cosine_runs_share_seeds_across_psi_and_carry_psi_to_the_runner() -> None:
+    specs = cosine_specs([0.0, 5e-5], runs=3)
+    assert [s.seed for s in specs[:3]] == [s.seed for s in specs[3:]] == [0, 1, 2]
+    assert COSINE_RUNNER == "model.sweep:cosine_run"
+    result = cosine_run(None, specs[3].mode, specs[3].fold, specs[3].seed)
+    m = result.metrics["cosine"]
+    assert m["epochs"] > 0 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0
+    assert len(result.artifacts["csc"]) == 4  # four phase-shifted sequences (3.2.2)
+
+
+def _run(psi: float, fold: int, f1_train: float, f1_test: float, d_inter: float) -> RunRecord:
+    train = {
+        "f1": f1_train,
+        "edit_distance": 1 - f1_train,
+        "csc.somatosensory.d_avg": 1.0,
+        "csc.somatosensory.d_rel": 0.9,
+        "csc.somatosensory.d_inter": d_inter,
+        "csc.somatosensory.d_intra": 0.5,
+    }
+    test = {"f1": f1_test, "edit_distance": 1 - f1_test, "sentence_exact": 0.0}
+    mixed = {"f1": (f1_train + f1_test) / 2, "edit_distance": 1 - (f1_train + f1_test) / 2}
+    return RunRecord(
+        f"k{psi}{fold}",
+        "psi_s",
+        "faithful",
+        fold,
+        0,
+        fold,
+        {},
+        {"psi_s": psi},
+        "done",
+        1,
+        1.0,
+        None,
+        1.0,
+        {"train": train, "test": test, "mixed": mixed},
+    )
+
+
+def test_the_psi_s_table_gives_mean_and_standard_error_per_value() -> None:
+    runs = [_run(1e-4, 0, 0.9, 0.2, 0.4), _run(1e-4, 1, 0.8, 0.4, 0.6), _run(1e-3, 0, 1.0, 0.5, 0.3)]
+    rows = psi_s_table(runs)
+    assert [r["psi_s"] for r in rows] == [1e-4, 1e-3]
+    assert math.isclose(rows[0]["mixed_f1"], 0.575) and math.isclose(rows[0]["mixed_f1_sem"], 0.025)
+    assert math.isclose(rows[0]["d_inter"], 0.5) and rows[1]["runs"] == 1 and rows[1]["mixed_f1_sem"] == 0.0
+    assert mean_sem([])[2] == 0
+
+
+def test_the_cosine_table_groups_by_psi() -> None:
+    runs = [
+        RunRecord(
+            f"c{i}",
+            "cosine",
+            "cosine:0.0",
+            0,
+            i,
+            i,
+            {},
+            {"psi": 0.0},
+            "done",
+            1,
+            1.0,
+            None,
+            1.0,
+            {"cosine": {"epochs": 100.0 + i, "d_avg": 1.0, "d_rel": 0.9}},
+        )
+        for i in range(2)
+    ]
+    (row,) = cosine_table(runs)
+    assert row["psi"] == 0.0 and row["epochs"] == 100.5 and row["runs"] == 2

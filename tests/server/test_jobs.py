@@ -1,0 +1,191 @@
+"""App jobs: a training job streams epochs, losses and Csc PCA points over SSE, saves a servable
+model, can be cancelled, and jobs survive a server restart (unfinished ones marked interrupted)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "model"))
+
+from server.jobs import JobManager  # noqa: E402
+from server.routes.jobs import router  # noqa: E402
+
+TINY = {
+    "training.epochs_auditory": 4,
+    "training.epochs_somatosensory": 4,
+    "training.epochs_visual": 4,
+    "training.epochs_assemblies": 4,
+    "training.progress_every": 1,
+}
+ENDLESS = {**TINY, "training.epochs_auditory": 10_000_000}
+
+
+def _app(tmp_path: Path) -> tuple[FastAPI, JobManager]:
+    app = FastAPI()
+    app.include_router(router)
+    jobs = JobManager(tmp_path / "runs", tmp_path / "models", data_loader="tiny_data:tiny_sequence_set")
+    app.state.jobs = jobs
+    return app, jobs
+
+
+def _events(client: TestClient, job_id: str) -> list[dict]:
+    out = []
+    with client.stream("GET", f"/api/jobs/{job_id}/events") as response:
+        assert response.headers["content-type"].startswith("text/event-stream")
+        for line in response.iter_lines():
+            if line.startswith("data: "):
+                out.append(json.loads(line[6:]))
+    return out
+
+
+def _wait(predicate, timeout: float = 120.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.1)
+
+
+@pytest.mark.slow
+def test_a_training_job_streams_progress_with_csc_points_and_saves_a_model(tmp_path) -> None:
+    app, jobs = _app(tmp_path)
+    with TestClient(app) as client:
+        r = client.post(
+            "/api/jobs", json={"kind": "train", "mode": "faithful", "name": "tiny", "overrides": TINY}
+        )
+        assert r.status_code == 201, r.text
+        job_id = r.json()["id"]
+        events = _events(client, job_id)
+        job = client.get(f"/api/jobs/{job_id}").json()
+    assert events[0]["type"] == "snapshot"
+    progress = [e for e in events if e["type"] == "progress"]
+    stages = {e["stage"] for e in progress}
+    assert {"auditory", "somatosensory", "visual"} <= stages
+    with_points = [e for e in progress if "points" in e]
+    assert with_points and all(len(e["points"]) == len(e["labels"]) == 8 for e in with_points)
+    assert all(len(p) == 2 for p in with_points[0]["points"])
+    assert events[-1]["type"] == "done" and events[-1]["status"] == "done"
+    assert job["status"] == "done" and job["result"]["model"] == "tiny"
+    assert set(job["result"]["metrics"]) == {"train", "test", "mixed"}
+    assert (tmp_path / "models" / "tiny" / "meta.json").is_file()
+    from model.checkpoint import load
+
+    model, meta = load(tmp_path / "models" / "tiny")
+    assert meta["metrics"]["test"]["n"] == 8 and len(meta["split"]["train"]) == 8
+
+
+def test_bad_job_requests_are_refused_with_a_reason(tmp_path) -> None:
+    app, _ = _app(tmp_path)
+    with TestClient(app) as client:
+        r = client.post("/api/jobs", json={"kind": "train", "mode": "peer"})
+        assert r.status_code == 422 and "mode" in r.json()["detail"]
+        r = client.post(
+            "/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": {"training.nope": 1}}
+        )
+        assert r.status_code == 422 and "training.nope" in r.json()["detail"]
+        assert client.get("/api/jobs/none").status_code == 404
+        assert client.get("/api/jobs").json() == []
+
+
+@pytest.mark.slow
+def test_a_running_job_can_be_cancelled(tmp_path) -> None:
+    app, jobs = _app(tmp_path)
+    with TestClient(app) as client:
+        job_id = client.post(
+            "/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}
+        ).json()["id"]
+        _wait(lambda: (client.get(f"/api/jobs/{job_id}").json().get("progress") or {}).get("epoch", 0) > 2)
+        assert client.post(f"/api/jobs/{job_id}/cancel").status_code == 200
+        _wait(lambda: client.get(f"/api/jobs/{job_id}").json()["status"] == "cancelled", 30)
+        assert not jobs.is_running(job_id)
+        assert client.post(f"/api/jobs/{job_id}/cancel").status_code == 409
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.slow
+def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_marked(tmp_path) -> None:
+    port = _free_port()
+    env = {**os.environ, "JOBS_RUN_DIR": str(tmp_path / "runs"), "JOBS_MODELS_DIR": str(tmp_path / "models")}
+    server = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "uvicorn",
+            "--factory",
+            "jobs_app:create",
+            "--app-dir",
+            str(HERE),
+            "--port",
+            str(port),
+            "--log-level",
+            "warning",
+        ],
+        env=env,
+    )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        _wait(lambda: _up(base), 60)
+        done_id = httpx.post(
+            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY}
+        ).json()["id"]
+        _wait(lambda: httpx.get(f"{base}/api/jobs/{done_id}").json()["status"] == "done", 180)
+        live_id = httpx.post(
+            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}
+        ).json()["id"]
+        _wait(lambda: httpx.get(f"{base}/api/jobs/{live_id}").json()["status"] == "running", 60)
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+    restarted = JobManager(tmp_path / "runs", tmp_path / "models", data_loader="tiny_data:tiny_sequence_set")
+    status = {j["id"]: j["status"] for j in restarted.list()}
+    assert status == {done_id: "done", live_id: "interrupted"}
+    assert (tmp_path / "models" / "kept" / "meta.json").is_file()
+    assert restarted.get(done_id)["result"]["model"] == "kept"
+
+
+def _up(base: str) -> bool:
+    try:
+        return httpx.get(f"{base}/api/jobs", timeout=1).status_code == 200
+    except httpx.HTTPError:
+        return False
+
+
+@pytest.mark.slow
+def test_a_trained_model_joins_the_apps_registry_and_can_be_served(tmp_path, monkeypatch) -> None:
+    """With the whole app: the finished job's model is listed by /api/models and selectable there."""
+    import dataclasses
+
+    from explorer_artefacts import build_artefacts
+
+    from server.app import create_app
+
+    settings = dataclasses.replace(build_artefacts(tmp_path / "artefacts"), viser=False)
+    monkeypatch.setenv("MTRNN_RUN_DIR", str(tmp_path / "runs"))
+    with TestClient(create_app(settings)) as client:
+        r = client.post(
+            "/api/jobs", json={"kind": "train", "mode": "faithful", "name": "fresh", "overrides": TINY}
+        )
+        assert r.status_code == 201, r.text
+        events = _events(client, r.json()["id"])
+        assert events[-1]["status"] == "done", events[-1]
+        models = client.get("/api/models").json()
+        assert "fresh" in [m["name"] for m in models["models"]]
+        assert client.put("/api/models/selected", json={"name": "fresh"}).json()["selected"] == "fresh"
+        assert client.get("/api/health").json()["model"] == "fresh"
