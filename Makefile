@@ -27,8 +27,9 @@ lint: $(STAMP)
 corpus: $(STAMP)         ## rebuild the shipped encoded corpus from seed 0
 	$(VENV)/bin/mtrnn corpus build --seed 0
 
-model: $(STAMP)          ## retrain the shipped default model from its seed
+model: $(STAMP)          ## retrain the shipped models from their seed: default (end_to_end) and faithful
 	$(VENV)/bin/mtrnn train --mode end_to_end --fold 0 --seed 0 --out data/artefacts/models/default
+	$(VENV)/bin/mtrnn train --mode faithful --fold 0 --seed 0 --out data/artefacts/models/faithful
 
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(PY) $$b; done

@@ -222,6 +222,19 @@ def _camera(app: Appearance, d_yaw: float = 0.0, d_pitch: float = 0.0) -> _Camer
     return _Camera(rotation, -rotation @ position, position, float(focal), centre)
 
 
+def head_angles(aim: np.ndarray, camera_offset: tuple[float, float, float]) -> tuple[float, float]:
+    """Head yaw and pitch (rad, pitch within the NAO's limits) that point the bottom camera,
+    displaced by `camera_offset` (m), at the torso-frame point `aim`: for appearances posed beyond
+    `Appearance.sample` (e.g. another robot's camera height) that still look at the workspace."""
+    yaw, pitch = 0.0, 0.3
+    base = HEAD_ORIGIN + np.asarray(camera_offset)
+    for _ in range(3):  # the camera position depends on the head angles it is solved for
+        d = np.asarray(aim, dtype=float) - (base + _rot_z(yaw) @ _rot_y(pitch) @ BOTTOM_CAMERA_OFFSET)
+        yaw = float(np.arctan2(d[1], d[0]))
+        pitch = float(np.arctan2(-d[2], np.hypot(d[0], d[1]))) - BOTTOM_CAMERA_PITCH
+    return yaw, float(np.clip(pitch, *HEAD_PITCH_LIMITS))
+
+
 def project(appearance: Appearance, points: np.ndarray) -> np.ndarray:
     """Pixel coordinates [n,2] of torso-frame points [n,3] in this appearance's (unjittered) camera."""
     return _camera(appearance).project(np.atleast_2d(np.asarray(points, dtype=float)))

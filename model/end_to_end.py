@@ -60,8 +60,8 @@ from model.mtrnn import MTRNN, kl_divergence, scaled_logistic
 from model.multimtrnn import MultiMTRNN, register_assemblies
 from model.training import (
     ProgressFn,
+    ProgressReporter,
     TrainedModel,
-    _Reporter,
     base_meta,
     encode_utterances,
     make_batch,
@@ -88,6 +88,10 @@ class EndToEndOptions:
     select_every: int = 10  # epochs between two selections
     input_noise: float = 0.0  # std of Gaussian noise on the (normalised) encoder inputs, per epoch
     vision_window: int = 0  # > 0: MTRNN_v learns from a random window of this many frames per epoch
+    recombine: float = 0.0  # weight of the word loss on recombined pairs (`recombination_loss`)
+    recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
+    weight_decay: float = 0.0  # L2 penalty on the encoders' and word units' weight matrices
+    average_from: float = 0.0  # > 0: perception weights averaged from this fraction of epochs on
     auditory_epochs: int = 1000  # stage 1
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
@@ -364,7 +368,7 @@ def train_auditory_stage(
     utterances: list[str],
     slots: WordSlots,
     epochs: int,
-    report: _Reporter,
+    report: ProgressReporter,
 ) -> None:
     """Stage 1: MTRNN_a and the CAs' projection E, e learn the KLD (3.1.3) from c_a,0 = E p* + e."""
     training = model.config.training
@@ -430,13 +434,49 @@ def calibrate(
     return g_s, g_v, right.float().mean().item()
 
 
+def recombination_loss(
+    assemblies: WordAssemblies,
+    z_s: Tensor,
+    z_v: Tensor,
+    heard: Tensor,
+    mix: Tensor,
+    generator: torch.Generator,
+    pairs: int,
+) -> Tensor:
+    """Word loss of recombined recordings: MTRNN_s reading recording A, MTRNN_v recording B.
+
+    Which sense tells which slot is not given: slot k's word is A's with a learned probability
+    sigmoid(mix_k) and B's otherwise, so the loss of slot k is
+    -log(sigmoid(mix_k) p_k(w_A) + sigmoid(-mix_k) p_k(w_B)) with p = softmax of z_s(A) + z_v(B)
+    (eq. 17). An encoder that memorised a slot it cannot perceive (the colour of each training
+    motion) is then wrong on every pair whose other recording shows another colour.
+    z_s, z_v: [B, points, words]; heard: [B, words]; mix: [slots]."""
+    loss = z_s.new_zeros(())
+    log_a, log_b = F.logsigmoid(mix), F.logsigmoid(-mix)
+    for _ in range(pairs):
+        other = torch.randperm(z_v.shape[0], generator=generator)
+        z = z_s + z_v[other]
+        parts = zip(
+            z.split(assemblies.sizes, dim=-1),
+            heard.split(assemblies.sizes, dim=-1),
+            heard[other].split(assemblies.sizes, dim=-1),
+            strict=True,
+        )
+        for k, (zk, ak, bk) in enumerate(parts):
+            log_p = torch.log_softmax(zk, dim=-1)
+            from_a = (ak[:, None, :] * log_p).sum(dim=-1) + log_a[k]
+            from_b = (bk[:, None, :] * log_p).sum(dim=-1) + log_b[k]
+            loss = loss - torch.logaddexp(from_a, from_b).mean()
+    return loss / (pairs * len(assemblies.sizes))
+
+
 def train_perception_stage(
     model: MultiMTRNN,
     assemblies: WordAssemblies,
     fit: _Perception,
     held_out: _Perception | None,
     options: EndToEndOptions,
-    report: _Reporter,
+    report: ProgressReporter,
     generator: torch.Generator,
 ) -> dict:
     """Stage 2: encoders and word units learn the heard words at the reading points. With a
@@ -450,10 +490,20 @@ def train_perception_stage(
         assemblies.weight_v,
         assemblies.bias_v,
     ]
+    mix = nn.Parameter(torch.zeros(len(assemblies.sizes)))  # which sense tells each slot (recombined)
+    if options.recombine > 0:
+        if not assemblies.slot_softmax:
+            raise ValueError("recombine needs slot_softmax word units")
+        params.append(mix)
     optimiser = make_optimiser([{"params": params}], model.config.training)
     target = fit.heard[:, None, :]
     epochs = options.perception_epochs
     best: dict = {"accuracy": -1.0}
+    matrices = [p for p in params if p.ndim == 2]
+    average_start = max(1, round(options.average_from * epochs)) if options.average_from > 0 else 0
+    if average_start and held_out is not None:
+        raise ValueError("average_from needs selection_scenes = 0 (the average is the final state)")
+    averaged: dict[str, Tensor] = {}
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         seen = fit.with_noise(options.input_noise, generator) if options.input_noise > 0 else fit
@@ -464,9 +514,20 @@ def train_perception_stage(
             loss = assemblies.word_loss(z_s, target) + assemblies.word_loss(z_v, target)
         else:
             loss = assemblies.word_loss(z_s + z_v, target)
+        if options.recombine > 0:
+            loss = loss + options.recombine * recombination_loss(
+                assemblies, z_s, z_v, fit.heard, mix, generator, options.recombine_pairs
+            )
+        if options.weight_decay > 0:
+            loss = loss + options.weight_decay * sum((w**2).sum() for w in matrices)
         loss.backward()
         optimiser.step()
         report("perception", epoch, epochs, loss.item())
+        if average_start and epoch >= average_start:
+            with torch.no_grad():  # running mean of the weights (Polyak averaging)
+                n = epoch - average_start
+                for k, v in model.state_dict().items():
+                    averaged[k] = v.detach().clone() if n == 0 else averaged[k] + (v - averaged[k]) / (n + 1)
         if held_out is not None and (epoch % options.select_every == 0 or epoch == epochs):
             with torch.no_grad():
                 h_s, h_v = perception_logits(model, assemblies, held_out, 1, 1.0)
@@ -474,8 +535,11 @@ def train_perception_stage(
             if accuracy >= best["accuracy"]:
                 state = {k: v.detach().clone() for k, v in model.state_dict().items()}
                 best = {"accuracy": accuracy, "epoch": epoch, "state": state, "gains": (g_s, g_v)}
+    recombined = {"sense_of_slot_is_s": torch.sigmoid(mix).tolist()} if options.recombine > 0 else {}
+    if averaged:
+        model.load_state_dict(averaged)
     if held_out is None:
-        return {}
+        return recombined
     model.load_state_dict(best["state"])
     with torch.no_grad():
         g_s, g_v = best["gains"]
@@ -489,6 +553,7 @@ def train_perception_stage(
         "held_out_accuracy": best["accuracy"],
         "gains_s": g_s.tolist(),
         "gains_v": g_v.tolist(),
+        **recombined,
     }
 
 
@@ -498,7 +563,7 @@ def train_joint_stage(
     data: _Perception,
     utterances: Tensor,
     options: EndToEndOptions,
-    report: _Reporter,
+    report: ProgressReporter,
 ) -> None:
     """Stage 3: perception -> CAs -> MTRNN_a, all weights through the auditory loss (+ words)."""
     training = model.config.training
@@ -544,7 +609,7 @@ def train_end_to_end(
     model = MultiMTRNN(config, assemblies=assemblies, seed=seed)
     batch = make_batch(data, config)
     history: list[dict] = []
-    report = _Reporter(progress, training.progress_every, history)
+    report = ProgressReporter(progress, training.progress_every, history)
     seconds: dict[str, float] = {}
     normalisers = None
     if options.normalise_inputs:

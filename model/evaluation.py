@@ -50,7 +50,7 @@ def fold_split(scene_keys: Sequence[str], fold: int, seed: int = 0) -> tuple[lis
     return train_idx, test_idx
 
 
-def _slot_vocabularies(utterances: Sequence[str]) -> tuple[list[str], list[str], list[str]] | None:
+def slot_vocabularies(utterances: Sequence[str]) -> tuple[list[str], list[str], list[str]] | None:
     """Actions, colours and objects read from target sentences "ACT the COL OBJ."."""
     slots = [parse_slots(u) for u in utterances]
     if any(v is None for s in slots for v in s.values()):
@@ -90,7 +90,7 @@ def score(
         (Transcript(tuple(d.phonemes), d.text), Transcript(tuple(text_to_phonemes(u)), u))
         for d, u in zip(descriptions, data.utterances, strict=True)
     ]
-    vocab = vocabularies or _slot_vocabularies(data.utterances)
+    vocab = vocabularies or slot_vocabularies(data.utterances)
     result: dict = summarise(pairs, *(vocab or (None, None, None)))
     actions = [parse_slots(u)["action"] or "" for u in data.utterances]
     points = {
@@ -102,13 +102,29 @@ def score(
     return result
 
 
-def _mixed(train_metrics, test_metrics):
+def mixed_metrics(train, test):
     """The paper's "mixed" (4.3): train and test with equal weight, for every numeric leaf."""
-    if isinstance(train_metrics, dict):
-        return {k: _mixed(train_metrics[k], test_metrics.get(k)) for k in train_metrics if k in test_metrics}
-    if train_metrics is None or test_metrics is None:
+    if isinstance(train, dict):
+        return {k: mixed_metrics(train[k], test.get(k)) for k in train if k in test}
+    if train is None or test is None:
         return None
-    return (float(train_metrics) + float(test_metrics)) / 2.0
+    return (float(train) + float(test)) / 2.0
+
+
+def score_split(
+    model: MultiMTRNN,
+    lexicon: Lexicon,
+    train_set: SequenceSet,
+    test_set: SequenceSet,
+    vocabularies: tuple[Sequence[str], Sequence[str], Sequence[str]] | None,
+) -> dict:
+    """{"train", "test", "mixed"}: `score` on both sides of a split and their mean (4.3)."""
+    metrics = {
+        "train": score(model, train_set, lexicon, vocabularies),
+        "test": score(model, test_set, lexicon, vocabularies),
+    }
+    metrics["mixed"] = mixed_metrics(metrics["train"], metrics["test"])
+    return metrics
 
 
 @dataclass
@@ -140,12 +156,7 @@ def run_once(
     train_set, test_set = data.subset(train_idx), data.subset(test_idx)
     trained = train(train_set, mode=mode, config=config, seed=seed, progress=progress)
     lexicon = trained.lexicon
-    vocab = _slot_vocabularies(data.utterances)
-    metrics = {
-        "train": score(trained.model, train_set, lexicon, vocab),
-        "test": score(trained.model, test_set, lexicon, vocab),
-    }
-    metrics["mixed"] = _mixed(metrics["train"], metrics["test"])
+    metrics = score_split(trained.model, lexicon, train_set, test_set, slot_vocabularies(data.utterances))
     seconds = time.perf_counter() - start
     meta = dict(trained.meta)
     meta.update(

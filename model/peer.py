@@ -56,9 +56,12 @@ class PeerConfig:
     proprioception: int = 5
     vision: int = 19  # the paper's 19 visual features (the centroid is left out, as for MTRNN_v)
     phonemes: int = len(PHONEMES)
-    alpha: float = 1.0  # teacher forcing of the decoder's input while training (eq. 5's alpha; 1 = full)
+    alpha: float = 0.0  # teacher forcing of the decoder's input while training (eq. 5's alpha; 0 = closed loop)
     binding: float = 1.0  # weight of |z - code_l|^2
     lr: float = 1e-2  # Adam
+    clip: float = 0.0  # max gradient norm (0 = no clipping)
+    feedback: bool = True  # the decoder reads its previous output (else the code alone drives it)
+    normalise: bool = True  # standardise every input feature by the training set's mean and std
     epochs: int = 300
     margin: int = 10  # silent steps after the longest training utterance (as model.training)
     progress_every: int = 10
@@ -82,25 +85,42 @@ class SequenceEncoder(nn.Module):
         super().__init__()
         self.gru = nn.GRU(inputs, hidden, batch_first=True)
         self.out = nn.Linear(hidden, code)
+        self.register_buffer("mean", torch.zeros(inputs))  # input standardisation (identity until fitted)
+        self.register_buffer("std", torch.ones(inputs))
+
+    def fit_normalisation(self, x: Tensor, lengths: Tensor) -> None:
+        """Mean and std of every feature over the valid steps of a padded batch."""
+        valid = torch.cat([x[i, : int(n)] for i, n in enumerate(lengths)])
+        self.mean.copy_(valid.mean(dim=0))
+        self.std.copy_(valid.std(dim=0).clamp_min(1e-3))
 
     def forward(self, x: Tensor, lengths: Tensor) -> Tensor:
-        states, _ = self.gru(x)
+        states, _ = self.gru((x - self.mean) / self.std)
         last = states[torch.arange(x.shape[0]), lengths.long() - 1]
         return torch.tanh(self.out(last))
 
 
 class PhonemeDecoder(nn.Module):
-    """GRU cell from a code to softmax phoneme activity [B, T_a, |B|], closed-loop."""
+    """GRU from a code to softmax phoneme activity [B, T_a, |B|]; the code is its input at every
+    step. With `feedback` it also reads its previous output (closed loop), otherwise the code alone
+    drives it."""
 
-    def __init__(self, code: int, hidden: int, phonemes: int) -> None:
+    def __init__(self, code: int, hidden: int, phonemes: int, feedback: bool = True) -> None:
         super().__init__()
         self.init = nn.Linear(code, hidden)
-        self.cell = nn.GRUCell(phonemes + code, hidden)  # the code is fed at every step
+        self.feedback = feedback
+        if feedback:
+            self.cell = nn.GRUCell(phonemes + code, hidden)
+        else:
+            self.gru = nn.GRU(code, hidden, batch_first=True)
         self.out = nn.Linear(hidden, phonemes)
         self.phonemes = phonemes
 
     def forward(self, code: Tensor, steps: int, teacher: Tensor | None = None, alpha: float = 0.0) -> Tensor:
         h = torch.tanh(self.init(code))
+        if not self.feedback:
+            states, _ = self.gru(code.unsqueeze(1).expand(-1, steps - 1, -1), h.unsqueeze(0))
+            return torch.softmax(self.out(torch.cat([h.unsqueeze(1), states], dim=1)), dim=-1)
         y = torch.softmax(self.out(h), dim=-1)
         outputs = [y]
         for t in range(1, steps):
@@ -124,7 +144,7 @@ class PeerModel(nn.Module):
             self.visual = SequenceEncoder(c.vision, c.hidden, c.code)
             self.fusion = nn.Linear(2 * c.code, c.code)
             self.language = SequenceEncoder(c.phonemes, c.hidden, c.code)
-            self.decoder = PhonemeDecoder(c.code, c.hidden, c.phonemes)
+            self.decoder = PhonemeDecoder(c.code, c.hidden, c.phonemes, c.feedback)
 
     def perceive(
         self, prop: Tensor, prop_len: Tensor, vis: Tensor, vis_len: Tensor
@@ -194,6 +214,9 @@ def _train_peer(data: SequenceSet, config: PeerConfig, seed: int, progress: Any)
     prop, prop_len = pad_sequences(data.proprioception, config.proprioception)
     vis, vis_len = pad_sequences(data.vision, config.vision)
     target, target_len = encode_utterances(data.utterances, steps)
+    if config.normalise:
+        model.somatosensory.fit_normalisation(prop, prop_len)
+        model.visual.fit_normalisation(vis, vis_len)
     optimiser = torch.optim.Adam(model.parameters(), lr=config.lr)
     history: list[dict] = []
     started = time.perf_counter()
@@ -206,6 +229,8 @@ def _train_peer(data: SequenceSet, config: PeerConfig, seed: int, progress: Any)
         binding = ((z - code_l) ** 2).sum(dim=1).mean()
         loss = describe + reconstruct + config.binding * binding
         loss.backward()
+        if config.clip > 0:
+            nn.utils.clip_grad_norm_(model.parameters(), config.clip)
         optimiser.step()
         if epoch % max(1, config.progress_every) == 0 or epoch == config.epochs:
             entry = {
@@ -270,7 +295,7 @@ def run_once(
     progress: Any = None,
 ) -> PeerRunResult:
     """`model.evaluation.run_once` for the peer: same split, same scoring, same metrics."""
-    from model.evaluation import _mixed, _slot_vocabularies, fold_split, score
+    from model.evaluation import fold_split, score_split, slot_vocabularies
 
     if mode != "peer":
         raise ValueError(f"model.peer.run_once trains the peer baseline only, not {mode!r}")
@@ -278,12 +303,8 @@ def run_once(
     train_idx, test_idx = fold_split(data.ids, fold, seed=0)
     train_set, test_set = data.subset(train_idx), data.subset(test_idx)
     trained = train_peer(train_set, config, seed, progress)
-    vocab = _slot_vocabularies(data.utterances)
-    metrics = {
-        "train": score(trained.model, train_set, trained.lexicon, vocab),
-        "test": score(trained.model, test_set, trained.lexicon, vocab),
-    }
-    metrics["mixed"] = _mixed(metrics["train"], metrics["test"])
+    vocab = slot_vocabularies(data.utterances)
+    metrics = score_split(trained.model, trained.lexicon, train_set, test_set, vocab)
     seconds = time.perf_counter() - start
     meta = dict(trained.meta)
     meta.update(

@@ -57,7 +57,7 @@ class TrainedModel:
 
 ModeFn = Callable[[SequenceSet, MultiMTRNNConfig, int, "ProgressFn | None"], TrainedModel]
 MODES: dict[str, ModeFn] = {}
-_PLUGIN_MODULES = ("model.end_to_end",)
+_PLUGIN_MODULES = ("model.end_to_end", "model.peer")
 
 
 def register_mode(name: str, fn: ModeFn) -> None:
@@ -72,11 +72,7 @@ def available_modes() -> list[str]:
 
 def _load_plugins() -> None:
     for module in _PLUGIN_MODULES:
-        try:
-            importlib.import_module(module)
-        except ModuleNotFoundError as err:
-            if err.name != module:
-                raise
+        importlib.import_module(module)
 
 
 # --- batches ------------------------------------------------------------------------------------
@@ -157,7 +153,7 @@ def _uniform(shape: tuple[int, ...], scale: float, generator: torch.Generator) -
     return (torch.rand(*shape, generator=generator) * 2 - 1) * scale
 
 
-class _Reporter:
+class ProgressReporter:
     """Collects history and calls `progress` every `every` epochs and at the last one."""
 
     def __init__(self, progress: ProgressFn | None, every: int, history: list[dict]) -> None:
@@ -183,7 +179,7 @@ def train_auditory(
     targets: Tensor,
     training: TrainingConfig,
     generator: torch.Generator,
-    report: _Reporter,
+    report: ProgressReporter,
     epochs: int | None = None,
 ) -> nn.Parameter:
     """MTRNN_a with context bias: learn weights, biases and one c_0 per sequence (eqs. 5-9).
@@ -209,7 +205,7 @@ def train_encoder(
     psi: float,
     training: TrainingConfig,
     generator: torch.Generator,
-    report: _Reporter,
+    report: ProgressReporter,
     stage: str,
     epochs: int,
 ) -> nn.Parameter:
@@ -244,7 +240,7 @@ def fit_assemblies(
     c_v: Tensor,
     c_a0: Tensor,
     training: TrainingConfig,
-    report: _Reporter,
+    report: ProgressReporter,
     epochs: int | None = None,
 ) -> None:
     """Associate the Csc states of the three nets in the CAs (eqs. 16-17), full batch."""
@@ -289,7 +285,7 @@ def train_faithful(
     model = MultiMTRNN(config, seed=seed)
     batch = make_batch(data, config)
     history: list[dict] = []
-    report = _Reporter(progress, training.progress_every, history)
+    report = ProgressReporter(progress, training.progress_every, history)
     seconds: dict[str, float] = {}
 
     start = time.perf_counter()

@@ -24,6 +24,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
 
 from server import routes
+from server.routes.jobs import attach_jobs
 from server.schemas import PageList
 from server.settings import Settings
 from server.state import AppState
@@ -56,11 +57,13 @@ def create_app(
 
             state.viewer = SceneViewer(state.backend.forward_kinematics)
         app.state.mtrnn = state
+        jobs = attach_jobs(app, settings)  # marks jobs a previous server left unfinished as interrupted
         # The Csc spaces need every corpus recording described once: do it before anyone asks.
         threading.Thread(target=state.csc_cache, name="csc-warmup", daemon=True).start()
         try:
             yield
         finally:
+            jobs.shutdown()
             if state.viewer is not None:
                 state.viewer.close()
 

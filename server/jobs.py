@@ -93,7 +93,7 @@ class _ProgressRelay:
 
 def _train_job(params: dict, events: Any, data: Any, models_dir: Path) -> dict:
     from model import checkpoint
-    from model.evaluation import _mixed, _slot_vocabularies, fold_split, score
+    from model.evaluation import fold_split, score_split, slot_vocabularies
     from model.metrics import parse_slots
     from model.protocol import apply_overrides, default_config
     from model.training import train
@@ -106,12 +106,8 @@ def _train_job(params: dict, events: Any, data: Any, models_dir: Path) -> dict:
     from model.config import MultiMTRNNConfig
 
     trained = train(train_set, mode, MultiMTRNNConfig.from_dict(config), seed, _ProgressRelay(events, labels))
-    vocab = _slot_vocabularies(data.utterances)
-    metrics = {
-        "train": score(trained.model, train_set, trained.lexicon, vocab),
-        "test": score(trained.model, test_set, trained.lexicon, vocab),
-    }
-    metrics["mixed"] = _mixed(metrics["train"], metrics["test"])
+    vocab = slot_vocabularies(data.utterances)
+    metrics = score_split(trained.model, trained.lexicon, train_set, test_set, vocab)
     meta = dict(trained.meta)
     meta.update(
         {

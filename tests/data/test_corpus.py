@@ -90,3 +90,12 @@ def test_shipped_corpus_has_all_recordings_and_fits_in_20_mb() -> None:
     assert len(set(corpus.scene_ids)) == 64
     durations = np.array([len(e.joints) / 20 for e in corpus.entries])
     assert durations.min() >= 3.0 and durations.max() <= 6.0
+
+
+@pytest.mark.skipif(not DEFAULT_PATH.is_file(), reason="shipped corpus not built yet")
+def test_shipped_corpus_matches_the_current_world_and_encoders() -> None:
+    """Guards against drift: a rebuilt recording of the shipped corpus encodes to the stored features."""
+    entry = load_corpus().by_id(IDS[0])
+    rec = export_recording(IDS[0], seed=0)
+    np.testing.assert_array_equal(rec.joints, entry.joints)
+    np.testing.assert_array_equal(encode_frames(rec.frames, workers=1), entry.vision)

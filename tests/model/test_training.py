@@ -12,7 +12,7 @@ from model.mtrnn import MTRNN, context_abstraction_loss
 from model.training import (
     GENERATION_MARGIN,
     MODES,
-    _Reporter,
+    ProgressReporter,
     encode_utterances,
     generation_steps,
     register_mode,
@@ -40,7 +40,7 @@ def _initial_targets_and_gradient(psi: float) -> tuple[torch.Tensor, torch.Tenso
 
 def _train_one_epoch(psi: float) -> torch.Tensor:
     net, x, lengths = _encoder_and_inputs()
-    report = _Reporter(None, 1, [])
+    report = ProgressReporter(None, 1, [])
     return train_encoder(
         net, x, lengths, psi, TrainingConfig(), torch.Generator().manual_seed(7), report, "s", 1
     )
@@ -74,7 +74,7 @@ def test_weights_take_full_rprop_steps_whatever_psi():
         1e-4,
         TrainingConfig(),
         torch.Generator().manual_seed(7),
-        _Reporter(None, 1, []),
+        ProgressReporter(None, 1, []),
         "s",
         1,
     )

@@ -5,7 +5,7 @@
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 
-export const meta = { route: "lessons", title: "Lessons", order: 80, description: "seven interactive lessons on the model" };
+export const meta = { route: "lessons", title: "Lessons", order: 50, description: "seven interactive lessons on the model" };
 
 const MODULES = {
   timescales: "./timescales.js",
