@@ -83,6 +83,7 @@ class EndToEndOptions:
     modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
+    visual_cf: int = 0  # > 0: MTRNN_v with this many Cf units instead of Table 1's 40
     normalise_inputs: bool = True  # standardise encoder inputs while training (`InputNormaliser`)
     selection_scenes: int = 6  # training scenes held out to calibrate and select perception
     select_every: int = 10  # epochs between two selections
@@ -595,6 +596,8 @@ def train_end_to_end(
     training = config.training
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
+    if options.visual_cf > 0:
+        config.visual = replace(config.visual, cf=options.visual_cf)
     slots = WordSlots.from_utterances(data.utterances)
     assemblies = WordAssemblies(
         config.somatosensory.csc,

@@ -59,7 +59,10 @@ class PeerConfig:
     alpha: float = 0.0  # teacher forcing of the decoder's input while training (eq. 5's alpha; 0 = closed loop)
     binding: float = 1.0  # weight of |z - code_l|^2
     lr: float = 1e-2  # Adam
+    batch: int = 0  # recordings per Adam step (0 = the whole training set)
     clip: float = 0.0  # max gradient norm (0 = no clipping)
+    anneal: float = 0.0  # fraction of the epochs over which alpha falls linearly to 0 (0 = constant alpha)
+    stride: int = 1  # the encoders read every stride-th step of proprioception and vision
     feedback: bool = True  # the decoder reads its previous output (else the code alone drives it)
     normalise: bool = True  # standardise every input feature by the training set's mean and std
     epochs: int = 300
@@ -149,8 +152,10 @@ class PeerModel(nn.Module):
     def perceive(
         self, prop: Tensor, prop_len: Tensor, vis: Tensor, vis_len: Tensor
     ) -> tuple[Tensor, Tensor, Tensor]:
-        code_s = self.somatosensory(prop, prop_len)
-        code_v = self.visual(vis, vis_len)
+        k = self.config.stride
+        prop_len, vis_len = (prop_len + k - 1) // k, (vis_len + k - 1) // k
+        code_s = self.somatosensory(prop[:, ::k], prop_len)
+        code_v = self.visual(vis[:, ::k], vis_len)
         return code_s, code_v, torch.tanh(self.fusion(torch.cat([code_s, code_v], dim=-1)))
 
     @torch.no_grad()
@@ -218,32 +223,44 @@ def _train_peer(data: SequenceSet, config: PeerConfig, seed: int, progress: Any)
         model.somatosensory.fit_normalisation(prop, prop_len)
         model.visual.fit_normalisation(vis, vis_len)
     optimiser = torch.optim.Adam(model.parameters(), lr=config.lr)
+    shuffle = torch.Generator().manual_seed(seed)  # minibatch order, deterministic for a seed
+    size = config.batch if config.batch > 0 else len(data)
     history: list[dict] = []
     started = time.perf_counter()
     for epoch in range(1, config.epochs + 1):
-        optimiser.zero_grad()
-        _, _, z = model.perceive(prop, prop_len, vis, vis_len)
-        code_l = model.language(target, target_len)
-        both = model.decoder(torch.cat([z, code_l]), steps, torch.cat([target, target]), config.alpha)
-        describe, reconstruct = _kld(target, both[: len(z)]), _kld(target, both[len(z) :])
-        binding = ((z - code_l) ** 2).sum(dim=1).mean()
-        loss = describe + reconstruct + config.binding * binding
-        loss.backward()
-        if config.clip > 0:
-            nn.utils.clip_grad_norm_(model.parameters(), config.clip)
-        optimiser.step()
+        alpha = config.alpha
+        if config.anneal > 0:
+            alpha *= max(0.0, 1.0 - (epoch - 1) / (config.anneal * config.epochs))
+        totals = torch.zeros(3)
+        for batch in torch.randperm(len(data), generator=shuffle).split(size):
+            optimiser.zero_grad()
+            _, _, z = model.perceive(prop[batch], prop_len[batch], vis[batch], vis_len[batch])
+            code_l = model.language(target[batch], target_len[batch])
+            tgt = target[batch]
+            both = model.decoder(torch.cat([z, code_l]), steps, torch.cat([tgt, tgt]), alpha)
+            describe, reconstruct = _kld(tgt, both[: len(z)]), _kld(tgt, both[len(z) :])
+            binding = ((z - code_l) ** 2).sum(dim=1).mean()
+            loss = describe + reconstruct + config.binding * binding
+            loss.backward()
+            if config.clip > 0:
+                nn.utils.clip_grad_norm_(model.parameters(), config.clip)
+            optimiser.step()
+            totals += len(batch) * torch.stack([loss, describe, binding]).detach()
         if epoch % max(1, config.progress_every) == 0 or epoch == config.epochs:
+            loss_mean, describe_mean, binding_mean = (totals / len(data)).tolist()
             entry = {
                 "stage": "peer",
                 "epoch": epoch,
                 "epochs": config.epochs,
-                "loss": float(loss.detach()),
-                "describe": float(describe.detach()),
-                "binding": float(binding.detach()),
+                "loss": loss_mean,
+                "describe": describe_mean,
+                "binding": binding_mean,
             }
             history.append(entry)
             if progress is not None:
-                progress({**entry, "csc": z.detach().tolist()})
+                with torch.no_grad():
+                    _, _, z = model.perceive(prop, prop_len, vis, vis_len)
+                progress({**entry, "csc": z.tolist()})
     model.eval()
     meta = {
         "mode": "peer",

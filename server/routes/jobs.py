@@ -1,4 +1,4 @@
-"""Training and evaluation jobs, their live progress (Server-Sent Events), and the results report.
+"""Training and evaluation jobs and their live progress (Server-Sent Events).
 
     GET    /api/jobs                   every job (newest first), also those of earlier server runs
     POST   /api/jobs                   start one: {"kind": "train", "mode": "end_to_end", "fold": 0, ...}
@@ -6,8 +6,6 @@
     GET    /api/jobs/{id}/events       text/event-stream: snapshot, progress (epoch, loss, Csc PCA
                                        points), run, done / error / cancelled
     POST   /api/jobs/{id}/cancel       kill it
-    GET    /api/results                the report's figure data (docs/figures/results.json)
-    GET    /api/results/figures/{png}  the report's PNG figures
 
 A finished training job's model joins the app's model registry (`/api/models` lists it, and
 `PUT /api/models/selected` serves it; after a restart the app finds it in the models folder).
@@ -25,7 +23,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, FastAPI, HTTPException, Request
-from fastapi.responses import FileResponse, StreamingResponse
+from fastapi.responses import StreamingResponse
 from pydantic import BaseModel, Field
 from starlette.concurrency import run_in_threadpool
 
@@ -65,11 +63,6 @@ class Job(BaseModel):
 def run_dir() -> Path:
     """The run store of the app's jobs: $MTRNN_RUN_DIR or runs/ (the CLI's default too)."""
     return Path(os.environ.get("MTRNN_RUN_DIR", REPO_ROOT / "runs"))
-
-
-def figures_dir() -> Path:
-    """Where `mtrnn report` wrote its figures: $MTRNN_FIGURES_DIR or docs/figures."""
-    return Path(os.environ.get("MTRNN_FIGURES_DIR", REPO_ROOT / "docs" / "figures"))
 
 
 def _register_model(app: FastAPI, name: str, path: Path) -> None:
@@ -178,20 +171,3 @@ async def job_events(job_id: str, request: Request, jobs: Jobs) -> StreamingResp
         media_type="text/event-stream",
         headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
     )
-
-
-@router.get("/api/results")
-def results() -> FileResponse:
-    """The numbers behind docs/RESULTS.md's figures (written by `mtrnn report`)."""
-    path = figures_dir() / "results.json"
-    if not path.is_file():
-        raise HTTPException(404, "no results yet: run `mtrnn evaluate`, `mtrnn sweep` and `mtrnn report`")
-    return FileResponse(path, media_type="application/json", headers={"Cache-Control": "no-cache"})
-
-
-@router.get("/api/results/figures/{name}")
-def result_figure(name: str) -> FileResponse:
-    path = (figures_dir() / name).resolve()
-    if path.parent != figures_dir().resolve() or path.suffix != ".png" or not path.is_file():
-        raise HTTPException(404, f"no figure {name!r}")
-    return FileResponse(path, media_type="image/png")

@@ -23,7 +23,7 @@ from benchmarks.robustness import (
 )
 from data.camera import Appearance, head_angles, project
 from data.motion import MAX_DURATION_S, MIN_DURATION_S, OBJECT_HOME, TABLE_Z, Teacher
-from data.recording import Recording
+from data.recording import Recording, read_recording
 from data.scenario import ACTIONS, COLOURS, SHAPES
 
 SEED = 1
@@ -184,26 +184,31 @@ def test_scenes_and_variants_are_spread_evenly() -> None:
     assert all(variants.count(v) == 8 for v in VARIANTS["camera_pose"])
 
 
-# One cheap variant per shift, rendered short (24 steps), written as .zip and read back.
+# One cheap variant per shift, rendered short (20 steps: 1 s), written as .zip and read back.
 CHEAP = {shift: VARIANTS[shift][-1] for shift in SHIFTS}
 
 
-@pytest.mark.parametrize("shift", SHIFTS)
+@pytest.mark.parametrize("shift", [s for s in SHIFTS if s != "fps"])
 def test_each_shift_reads_back_as_a_valid_recording(shift: str) -> None:
     plan = make_plan(shift, scene_order()[5], 5, SEED, CHEAP[shift])
-    rec = make_recording(plan, steps=24)
-    assert isinstance(rec, Recording) and rec.fps == 20.0
-    assert 20 <= rec.steps <= 24 and rec.utterance == plan.scene.utterance
+    rec = make_recording(plan, steps=20)
+    assert isinstance(rec, Recording) and rec.fps == 20.0 and rec.steps == 20
+    assert rec.utterance == plan.scene.utterance
     assert rec.frames.shape[1:] == (plan.appearance.height, plan.appearance.width, 3)
     assert np.isfinite(rec.joints).all()
     assert rec.frames.std() > 5.0  # a rendered scene, not a blank image
 
 
-def test_fps_shift_writes_50_hz_joints_and_10_fps_frames(tmp_path) -> None:
+def test_fps_shift_writes_50_hz_joints_and_10_fps_frames_read_back_at_20_hz(tmp_path) -> None:
     plan = make_plan("fps", scene_order()[2], 2, SEED, "meta fps")
-    path = write_recording(plan, tmp_path / "fps.zip", steps=24)
+    path = write_recording(plan, tmp_path / "fps.zip", steps=24)  # 1.15 s
     with zipfile.ZipFile(path) as archive:
         rows = archive.read("joints.csv").decode().strip().splitlines()[1:]
         frames = [n for n in archive.namelist() if n.startswith("frames/")]
     times = np.array([float(r.split(",")[0]) for r in rows])
-    assert np.allclose(np.diff(times), 1 / 50) and len(frames) == 12  # 24 steps at 20 Hz = 1.15 s
+    assert np.allclose(np.diff(times), 1 / 50) and len(frames) == 12
+    rec = read_recording(path, path.name)
+    assert rec.fps == 20.0 and rec.steps == 23 and len(rec.frames) == 23  # the 20 Hz grid over 1.14 s
+    assert rec.utterance == plan.scene.utterance
+    # nearest frame: the 12 frames at 10 fps fill the 23 steps, each used once or twice
+    assert len(np.unique(rec.frames.reshape(len(rec.frames), -1), axis=0)) == 12

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+import torch.nn.functional as F
 
 from data.scenario import all_scenes
 from model import checkpoint
@@ -17,6 +18,7 @@ from model.end_to_end import (
     WordSlots,
     calibrate,
     reading_points,
+    recombination_loss,
     selection_split,
     train_end_to_end,
 )
@@ -105,6 +107,41 @@ def test_calibration_trusts_the_informative_encoder_only() -> None:
     assert g_v[0] < 0.1 * g_s[0]
 
 
+def _two_slot_recordings(n: int = 40) -> tuple[WordAssemblies, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Slot 0 is told by z_s only, slot 1 by z_v only (each encoder sure of its own slot)."""
+    rng = torch.Generator().manual_seed(0)
+    cas = WordAssemblies(2, 2, 3, [["a", "b"], ["c", "d"]])
+    first, second = torch.randint(0, 2, (n,), generator=rng), torch.randint(0, 2, (n,), generator=rng)
+    heard = torch.cat([F.one_hot(first, 2), F.one_hot(second, 2)], dim=1).float()
+    z_s = torch.cat([8.0 * F.one_hot(first, 2) - 4.0, torch.zeros(n, 2)], dim=1)[:, None, :]
+    z_v = torch.cat([torch.zeros(n, 2), 8.0 * F.one_hot(second, 2) - 4.0], dim=1)[:, None, :]
+    return cas, z_s, z_v, heard
+
+
+def test_recombination_learns_which_sense_tells_each_slot() -> None:
+    cas, z_s, z_v, heard = _two_slot_recordings()
+    mix = torch.zeros(2, requires_grad=True)
+    loss = recombination_loss(cas, z_s, z_v, heard, mix, torch.Generator().manual_seed(1), pairs=3)
+    loss.backward()
+    # slot 0's word comes with recording A (MTRNN_s), slot 1's with recording B (MTRNN_v)
+    assert mix.grad[0] < 0 < mix.grad[1]
+    right = torch.tensor([20.0, -20.0])
+    wrong = -right
+    g = torch.Generator
+    assert recombination_loss(cas, z_s, z_v, heard, right, g().manual_seed(1), 3) < 0.05
+    assert recombination_loss(cas, z_s, z_v, heard, wrong, g().manual_seed(1), 3) > 1.0
+
+
+def test_recombination_penalises_an_encoder_that_memorised_the_other_sense() -> None:
+    cas, z_s, z_v, heard = _two_slot_recordings()
+    mix = torch.tensor([20.0, -20.0])
+    honest = recombination_loss(cas, z_s, z_v, heard, mix, torch.Generator().manual_seed(2), 1)
+    memorised = z_s.clone()
+    memorised[..., 2:] = 8.0 * heard[:, None, 2:] - 4.0  # MTRNN_s also "knows" slot 1 of its own recording
+    worse = recombination_loss(cas, memorised, z_v, heard, mix, torch.Generator().manual_seed(2), 1)
+    assert honest < 0.01 and worse > 0.1  # ties on every pair whose two recordings differ in slot 1
+
+
 def test_selection_holds_out_whole_scenes_and_keeps_every_word() -> None:
     data = tiny_corpus(variants=2)
     slots = WordSlots.from_utterances(data.utterances)
@@ -146,7 +183,14 @@ def test_mode_is_registered_and_deterministic() -> None:
     assert "end_to_end" in available_modes()
     assert MODES["end_to_end"] is train_end_to_end
     data = tiny_corpus(variants=1)
-    options = EndToEndOptions(auditory_epochs=2, perception_epochs=2, input_noise=0.1, vision_window=5)
+    options = EndToEndOptions(
+        auditory_epochs=2,
+        perception_epochs=2,
+        input_noise=0.1,
+        vision_window=5,
+        recombine=1.0,
+        selection_scenes=0,
+    )
     a = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     b = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     for (name, x), (_, y) in zip(a.model.state_dict().items(), b.model.state_dict().items(), strict=True):

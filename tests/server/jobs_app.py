@@ -1,4 +1,4 @@
-"""A small app for the job tests: the jobs router, the web pages and Plotly, on the tiny scene set.
+"""A small app for the job tests: the jobs and results routers, web pages and Plotly, tiny scenes.
 
 Run by uvicorn in a subprocess (`--factory jobs_app:create`) so a test can kill the server;
 JOBS_RUN_DIR, JOBS_MODELS_DIR name the run store and models folder.
@@ -19,7 +19,7 @@ sys.path.insert(0, str(HERE.parent / "model"))  # tiny_data, importable by the s
 
 from server.app import PLOTLY_JS  # noqa: E402
 from server.jobs import JobManager  # noqa: E402
-from server.routes.jobs import router  # noqa: E402
+from server.routes import jobs, results  # noqa: E402
 from server.settings import WEB_DIR  # noqa: E402
 
 TINY_DATA = "tiny_data:tiny_sequence_set"
@@ -27,7 +27,8 @@ TINY_DATA = "tiny_data:tiny_sequence_set"
 
 def create() -> FastAPI:
     app = FastAPI()
-    app.include_router(router)
+    app.include_router(jobs.router)
+    app.include_router(results.router)
     app.state.jobs = JobManager(
         Path(os.environ["JOBS_RUN_DIR"]), Path(os.environ["JOBS_MODELS_DIR"]), data_loader=TINY_DATA
     )

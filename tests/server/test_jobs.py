@@ -104,7 +104,7 @@ def test_a_running_job_can_be_cancelled(tmp_path) -> None:
     app, jobs = _app(tmp_path)
     with TestClient(app) as client:
         job_id = client.post(
-            "/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}
+            "/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}, timeout=30
         ).json()["id"]
         _wait(lambda: (client.get(f"/api/jobs/{job_id}").json().get("progress") or {}).get("epoch", 0) > 2)
         assert client.post(f"/api/jobs/{job_id}/cancel").status_code == 200
@@ -143,13 +143,14 @@ def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_mar
     try:
         _wait(lambda: _up(base), 60)
         done_id = httpx.post(
-            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY}
+            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY},
+            timeout=30,
         ).json()["id"]
-        _wait(lambda: httpx.get(f"{base}/api/jobs/{done_id}").json()["status"] == "done", 180)
+        _wait(lambda: httpx.get(f"{base}/api/jobs/{done_id}", timeout=30).json()["status"] == "done", 180)
         live_id = httpx.post(
-            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}
+            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}, timeout=30
         ).json()["id"]
-        _wait(lambda: httpx.get(f"{base}/api/jobs/{live_id}").json()["status"] == "running", 60)
+        _wait(lambda: httpx.get(f"{base}/api/jobs/{live_id}", timeout=30).json()["status"] == "running", 60)
     finally:
         server.send_signal(signal.SIGKILL)
         server.wait()
