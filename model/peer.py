@@ -56,7 +56,7 @@ class PeerConfig:
     proprioception: int = 5
     vision: int = 19  # the paper's 19 visual features (the centroid is left out, as for MTRNN_v)
     phonemes: int = len(PHONEMES)
-    alpha: float = 0.0  # teacher forcing of the decoder's input while training (eq. 5's alpha; 0 = closed loop)
+    alpha: float = 0.0  # teacher forcing of the decoder input in training (eq. 5; 0 = closed loop)
     binding: float = 1.0  # weight of |z - code_l|^2
     lr: float = 1e-2  # Adam
     batch: int = 0  # recordings per Adam step (0 = the whole training set)

@@ -90,6 +90,9 @@ def test_pick_a_scene_read_its_utterance_and_see_the_arm_in_3d(page, base_url: s
     assert pixels.std() > 8.0, "the 3D canvas is blank"
     assert page.locator("#camera-frame").evaluate("img => img.complete && img.naturalWidth") > 0
     page.wait_for_url(re.compile(r"[?&]t=2"))  # the time is in the URL
+    # viser warns that headless chromium renders WebGL in software: close it for the screenshot
+    for close in viser.locator(".mantine-Notification-root button").all():
+        close.click()
     shoot(page, "scene")
 
 
