@@ -34,6 +34,12 @@ Training, top to bottom (`train_end_to_end`):
    slot fitted on them (`calibrate`: how far that sense can be trusted for that slot on unseen
    scenes), and the state with the best held-out accuracy is kept, gains folded into W_s, W_v.
    With `modality_experts` each encoder's units learn on their own (a product of experts).
+   With `recombine`, the word loss also covers recombined recordings (MTRNN_s reading one
+   recording, MTRNN_v another) whose slot-k word is learned to come with one of the two senses
+   (`recombination_loss`): nobody tells the learner which sense carries which slot, but an
+   encoder that memorised what it cannot perceive is wrong on recombined pairs, so it unlearns it.
+   `weight_decay` adds an L2 penalty on the weight matrices; `average_from` makes the final
+   perception weights the running mean of the weights over the last epochs (Polyak averaging).
 3. Joint stage (`joint_epochs`): perception -> CAs -> MTRNN_a, everything through the auditory
    loss (plus the word loss when on). With `word_loss` off this is the only stage: the plain
    2020-style end-to-end training that the options are measured against.
@@ -83,19 +89,24 @@ class EndToEndOptions:
     modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
-    visual_cf: int = 0  # > 0: MTRNN_v with this many Cf units instead of Table 1's 40
     normalise_inputs: bool = True  # standardise encoder inputs while training (`InputNormaliser`)
-    selection_scenes: int = 6  # training scenes held out to calibrate and select perception
+    selection_scenes: int = 0  # training scenes held out to calibrate and select perception
     select_every: int = 10  # epochs between two selections
     input_noise: float = 0.0  # std of Gaussian noise on the (normalised) encoder inputs, per epoch
     vision_window: int = 0  # > 0: MTRNN_v learns from a random window of this many frames per epoch
-    recombine: float = 0.0  # weight of the word loss on recombined pairs (`recombination_loss`)
+    recombine: float = 1.0  # weight of the word loss on recombined pairs (`recombination_loss`)
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
-    weight_decay: float = 0.0  # L2 penalty on the encoders' and word units' weight matrices
-    average_from: float = 0.0  # > 0: perception weights averaged from this fraction of epochs on
+    weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
+    average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
     auditory_epochs: int = 1000  # stage 1
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
+
+    def __post_init__(self) -> None:
+        if self.average_from > 0 and self.selection_scenes > 0:
+            raise ValueError("average_from needs selection_scenes = 0 (the average is the final state)")
+        if self.recombine > 0 and not self.slot_softmax:
+            raise ValueError("recombine needs slot_softmax word units")
 
 
 # --- the words the learner heard -----------------------------------------------------------------
@@ -480,9 +491,10 @@ def train_perception_stage(
     report: ProgressReporter,
     generator: torch.Generator,
 ) -> dict:
-    """Stage 2: encoders and word units learn the heard words at the reading points. With a
-    held-out set, every `select_every` epochs the encoders' gains are calibrated on it and the
-    best state (held-out accuracy, then loss) is kept, its gains folded into W_s, W_v."""
+    """Stage 2: encoders and word units learn the heard words at the reading points (and on
+    recombined pairs, `recombination_loss`). With a held-out set, every `select_every` epochs the
+    encoders' gains are calibrated on it and the best state (held-out accuracy, then loss) is
+    kept, its gains folded into W_s, W_v; otherwise the final (or averaged) state is kept."""
     params = [
         *model.somatosensory.parameters(),
         *model.visual.parameters(),
@@ -493,8 +505,6 @@ def train_perception_stage(
     ]
     mix = nn.Parameter(torch.zeros(len(assemblies.sizes)))  # which sense tells each slot (recombined)
     if options.recombine > 0:
-        if not assemblies.slot_softmax:
-            raise ValueError("recombine needs slot_softmax word units")
         params.append(mix)
     optimiser = make_optimiser([{"params": params}], model.config.training)
     target = fit.heard[:, None, :]
@@ -502,8 +512,6 @@ def train_perception_stage(
     best: dict = {"accuracy": -1.0}
     matrices = [p for p in params if p.ndim == 2]
     average_start = max(1, round(options.average_from * epochs)) if options.average_from > 0 else 0
-    if average_start and held_out is not None:
-        raise ValueError("average_from needs selection_scenes = 0 (the average is the final state)")
     averaged: dict[str, Tensor] = {}
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
@@ -596,8 +604,6 @@ def train_end_to_end(
     training = config.training
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
-    if options.visual_cf > 0:
-        config.visual = replace(config.visual, cf=options.visual_cf)
     slots = WordSlots.from_utterances(data.utterances)
     assemblies = WordAssemblies(
         config.somatosensory.csc,

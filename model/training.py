@@ -1,14 +1,19 @@
 """Training the MultiMTRNN: a registry of named modes behind one `train()`.
 
-`faithful` is the paper's staged recipe (3.1.3-3.1.4, 3.2.1, 3.4.3):
-1. MTRNN_a with a learnable c_0 per training sequence (init +-0.01), teacher forcing alpha = 0.1
-   (eq. 5), KLD on the softmax IO, full-batch BPTT, RPROP on weights, biases and c_0 (eqs. 7-9).
-2. MTRNN_s and MTRNN_v with a learnable c_T per training sequence (init +-1) and self-organisation
+`faithful` is the paper's staged recipe (3.1.3-3.1.4, 3.2.1, 3.4.3); our readings of what the
+paper leaves open are in docs/experiments/faithful.md:
+1. MTRNN_a with a learnable c_0 per training *sentence* (3.3: the Csc "had to be trained
+   individually for every sentence"; a scene's four recordings share one utterance, hence one
+   c_a,0), init +-0.01, teacher forcing alpha = 0.1 (eq. 5), KLD on the softmax IO, full-batch
+   BPTT, RPROP on weights, biases and c_0 (eqs. 7-9).
+2. MTRNN_s and MTRNN_v with a learnable c_T per training recording (init +-1) and self-organisation
    forcing psi (eqs. 11-12): c_T sits in its own RPROP group whose rates are the weights' rates
    times psi (lr = psi * 0.05, rates in [psi * 1e-6, psi * 1.0]); psi = 0 leaves c_T fixed.
 3. The cell assemblies fitted by LMS (eqs. 16-17) from the encoders' abstraction c_s,T, c_v,T of
-   each training sequence (what the CAs will see when describing a scene; the learned targets
+   each training recording (what the CAs will see when describing a scene; the learned targets
    c_T are only what the encoders were pulled towards) to the learned c_a,0 of its utterance.
+
+`FaithfulOptions` names the departures from that reading (all off by default).
 
 Eq. (10) adapts zeta (c_0's rate) in proportion to the mean rate of the weights of unit i; we
 give c_0 RPROP's own per-element rate adaptation instead (same initial rate, same xi+, xi- and
@@ -23,7 +28,8 @@ import importlib
 import logging
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Literal
 
 import numpy as np
 import torch
@@ -181,10 +187,12 @@ def train_auditory(
     generator: torch.Generator,
     report: ProgressReporter,
     epochs: int | None = None,
+    report_rows: Tensor | None = None,
 ) -> nn.Parameter:
     """MTRNN_a with context bias: learn weights, biases and one c_0 per sequence (eqs. 5-9).
 
-    Returns the learned c_0 table [B, csc]."""
+    `report_rows` (optional) picks the c_0 rows the progress reports show, e.g. one per recording
+    when the sequences are the distinct utterances. Returns the learned c_0 table [B, csc]."""
     c0 = nn.Parameter(_uniform((targets.shape[0], net.cfg.csc), net.cfg.csc_init, generator))
     optimiser = make_optimiser([{"params": [*net.parameters(), c0]}], training)
     epochs = training.epochs_auditory if epochs is None else epochs
@@ -194,7 +202,7 @@ def train_auditory(
         loss = kl_divergence(targets, output)
         loss.backward()
         optimiser.step()
-        report("auditory", epoch, epochs, loss.item(), c0)
+        report("auditory", epoch, epochs, loss.item(), c0 if report_rows is None else c0[report_rows])
     return c0
 
 
@@ -208,23 +216,26 @@ def train_encoder(
     report: ProgressReporter,
     stage: str,
     epochs: int,
+    groups: Tensor | None = None,
 ) -> nn.Parameter:
     """MTRNN with context abstraction: weights learn from (1 - psi) of the Csc error at the final
     step (eq. 11), the targets c_T (init +-1) move with a psi-scaled step (eq. 12).
 
-    Returns the c_T table [B, csc] (unchanged when psi = 0)."""
-    c_t = nn.Parameter(
-        _uniform((inputs.shape[0], net.cfg.csc), net.cfg.csc_init, generator), requires_grad=psi > 0
-    )
+    `groups` [B] (optional) makes sequences share a target: sequence k is pulled towards row
+    groups[k] (`FaithfulOptions.perception_targets = "scene"`). Returns the c_T table [G, csc]
+    (G = B without groups; unchanged when psi = 0)."""
+    rows = inputs.shape[0] if groups is None else int(groups.max()) + 1
+    c_t = nn.Parameter(_uniform((rows, net.cfg.csc), net.cfg.csc_init, generator), requires_grad=psi > 0)
     optimiser = make_optimiser(
         [{"params": list(net.parameters())}, {"params": [c_t], "scale": psi}], training
     )
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
-        loss = context_abstraction_loss(net, net.abstract(inputs, lengths), c_t, psi)
+        targets = c_t if groups is None else c_t[groups]
+        loss = context_abstraction_loss(net, net.abstract(inputs, lengths), targets, psi)
         loss.backward()
         optimiser.step()
-        report(stage, epoch, epochs, loss.item(), c_t)
+        report(stage, epoch, epochs, loss.item(), targets)
     return c_t
 
 
@@ -255,6 +266,67 @@ def fit_assemblies(
         report("assemblies", epoch, epochs, loss.item())
 
 
+def solve_assemblies(
+    assemblies: nn.Module, c_s: Tensor, c_v: Tensor, c_a0: Tensor, iterations: int = 2000
+) -> float:
+    """`FaithfulOptions.assemblies_solver = "optimum"`: the minimum of eq. (16) itself, i.e. where
+    the LMS rule converges, instead of a fixed number of RPROP epochs.
+
+    eq. (17) is linear, so least squares of z onto c_a,0 (float64) gives a near-optimal start;
+    L-BFGS then minimises eq. (16) (the error on f(z) vs f(c_a,0)) from there. Needs the paper's
+    linear `CellAssemblies` (a `weight` [csc_a, csc_s + csc_v] and a `bias`). Returns the LMS
+    error of the solution."""
+    c_s, c_v, c_a0 = c_s.detach().double(), c_v.detach().double(), c_a0.detach().double()
+    x = torch.cat([scaled_logistic(c_s), scaled_logistic(c_v), torch.ones(len(c_s), 1).double()], dim=1)
+    start = torch.linalg.lstsq(x, c_a0).solution  # z = x @ start
+    weight = start[:-1].T.clone().requires_grad_()
+    bias = start[-1].clone().requires_grad_()
+
+    def lms() -> Tensor:  # eq. (16) with eq. (17)'s z
+        y = scaled_logistic(x[:, :-1] @ weight.T + bias)
+        return 0.5 * ((y - scaled_logistic(c_a0)) ** 2).sum(dim=1).mean()
+
+    optimiser = torch.optim.LBFGS(
+        [weight, bias],
+        max_iter=iterations,
+        tolerance_grad=1e-10,
+        tolerance_change=1e-14,
+        history_size=50,
+        line_search_fn="strong_wolfe",
+    )
+
+    def closure() -> Tensor:
+        optimiser.zero_grad()
+        loss = lms()
+        loss.backward()
+        return loss
+
+    optimiser.step(closure)
+    with torch.no_grad():
+        assemblies.weight.copy_(weight)
+        assemblies.bias.copy_(bias)
+    return assemblies_loss(assemblies, c_s.float(), c_v.float(), c_a0.float()).item()
+
+
+@dataclass
+class FaithfulOptions:
+    """Departures from the paper's reading in `faithful` (docs/experiments/faithful.md); the
+    defaults are the paper. Recorded in the checkpoint meta under "faithful"."""
+
+    # One learnable c_T per training recording (3.2.1, 3.4.3: per sequence) or one per scene,
+    # shared by the scene's recordings (its utterance names the scene: the grammar is unambiguous).
+    perception_targets: Literal["recording", "scene"] = "recording"
+    # eq. (16) descended by the RPROP variant for `epochs_assemblies`, or minimised to convergence.
+    assemblies_solver: Literal["lms", "optimum"] = "lms"
+
+
+def distinct_rows(utterances: Sequence[str]) -> tuple[list[str], Tensor]:
+    """The distinct utterances in first-seen order and, per recording, the row of its utterance."""
+    distinct = list(dict.fromkeys(utterances))
+    row = {u: i for i, u in enumerate(distinct)}
+    return distinct, torch.tensor([row[u] for u in utterances])
+
+
 def prepare(data: SequenceSet, config: MultiMTRNNConfig | None) -> MultiMTRNNConfig:
     """A copy of `config` (default: Table 1) with T_a set from the training utterances."""
     if len(data) == 0:
@@ -278,64 +350,96 @@ def base_meta(data: SequenceSet, config: MultiMTRNNConfig, model: MultiMTRNN, mo
 
 
 def train_faithful(
-    data: SequenceSet, config: MultiMTRNNConfig, seed: int, progress: ProgressFn | None = None
+    data: SequenceSet,
+    config: MultiMTRNNConfig,
+    seed: int,
+    progress: ProgressFn | None = None,
+    options: FaithfulOptions | None = None,
 ) -> TrainedModel:
     """The paper's staged recipe (module docstring)."""
+    options = options or FaithfulOptions()
+    if options.perception_targets not in ("recording", "scene"):
+        raise ValueError(f"unknown perception_targets {options.perception_targets!r}")
+    if options.assemblies_solver not in ("lms", "optimum"):
+        raise ValueError(f"unknown assemblies_solver {options.assemblies_solver!r}")
     training = config.training
     model = MultiMTRNN(config, seed=seed)
     batch = make_batch(data, config)
+    sentences, sentence_of = distinct_rows(data.utterances)
     history: list[dict] = []
     report = ProgressReporter(progress, training.progress_every, history)
     seconds: dict[str, float] = {}
 
     start = time.perf_counter()
-    c_a0 = train_auditory(
-        model.auditory, batch.utterances, training, torch.Generator().manual_seed(seed + 1), report
+    # 3.3: one c_a,0 per sentence; its targets are the distinct utterances' encodings
+    c_sentence = train_auditory(
+        model.auditory,
+        encode_utterances(sentences, config.generation_steps)[0],
+        training,
+        torch.Generator().manual_seed(seed + 1),
+        report,
+        report_rows=sentence_of,
     )
+    c_a0 = c_sentence.detach()[sentence_of]  # each recording: its sentence's c_a,0
     seconds["auditory"] = time.perf_counter() - start
 
-    start = time.perf_counter()
-    c_st = train_encoder(
-        model.somatosensory,
-        batch.proprioception,
-        batch.proprioception_lengths,
-        training.psi_s,
-        training,
-        torch.Generator().manual_seed(seed + 2),
-        report,
-        "somatosensory",
-        training.epochs_somatosensory,
-    )
-    seconds["somatosensory"] = time.perf_counter() - start
-
-    start = time.perf_counter()
-    c_vt = train_encoder(
-        model.visual,
-        batch.vision,
-        batch.vision_lengths,
-        training.psi_v,
-        training,
-        torch.Generator().manual_seed(seed + 3),
-        report,
-        "visual",
-        training.epochs_visual,
-    )
-    seconds["visual"] = time.perf_counter() - start
+    groups = sentence_of if options.perception_targets == "scene" else None
+    targets = {}
+    for stage, net, inputs, lengths, psi, epochs, offset in (
+        (
+            "somatosensory",
+            model.somatosensory,
+            batch.proprioception,
+            batch.proprioception_lengths,
+            training.psi_s,
+            training.epochs_somatosensory,
+            2,
+        ),
+        (
+            "visual",
+            model.visual,
+            batch.vision,
+            batch.vision_lengths,
+            training.psi_v,
+            training.epochs_visual,
+            3,
+        ),
+    ):
+        start = time.perf_counter()
+        table = train_encoder(
+            net,
+            inputs,
+            lengths,
+            psi,
+            training,
+            torch.Generator().manual_seed(seed + offset),
+            report,
+            stage,
+            epochs,
+            groups,
+        )
+        targets[stage] = table.detach() if groups is None else table.detach()[groups]
+        seconds[stage] = time.perf_counter() - start
 
     start = time.perf_counter()
     with torch.no_grad():
         c_s, c_v = model.abstract(
             batch.proprioception, batch.vision, batch.proprioception_lengths, batch.vision_lengths
         )
-    fit_assemblies(model.assemblies, c_s, c_v, c_a0, training, report)
+    if options.assemblies_solver == "optimum":
+        loss = solve_assemblies(model.assemblies, c_s, c_v, c_a0)
+        report("assemblies", 1, 1, loss)
+    else:
+        fit_assemblies(model.assemblies, c_s, c_v, c_a0, training, report)
     seconds["assemblies"] = time.perf_counter() - start
 
     meta = base_meta(data, config, model, "faithful", seed)
     meta["seconds"] = seconds
-    csc = {
-        "auditory_c0": c_a0.detach().numpy().copy(),
-        "somatosensory_cT": c_st.detach().numpy().copy(),
-        "visual_cT": c_vt.detach().numpy().copy(),
+    meta["faithful"] = asdict(options)
+    csc = {  # one row per training recording (meta["ids"])
+        "auditory_c0": c_a0.numpy().copy(),
+        "somatosensory_cT": targets["somatosensory"].numpy().copy(),
+        "visual_cT": targets["visual"].numpy().copy(),
     }
     model.eval()
     return TrainedModel(model, history, meta, csc)

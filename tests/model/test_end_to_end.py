@@ -3,6 +3,8 @@ normalisation, held-out calibration and a whole (tiny) training that checkpoints
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import torch
@@ -156,7 +158,9 @@ def test_selection_holds_out_whole_scenes_and_keeps_every_word() -> None:
 
 
 def _tiny_options() -> EndToEndOptions:
-    return EndToEndOptions(auditory_epochs=4, perception_epochs=4, select_every=2, selection_scenes=2)
+    return EndToEndOptions(
+        auditory_epochs=4, perception_epochs=4, select_every=2, selection_scenes=2, average_from=0.0
+    )
 
 
 def test_training_records_options_and_describes_through_the_model_path(tmp_path) -> None:
@@ -190,11 +194,31 @@ def test_mode_is_registered_and_deterministic() -> None:
         vision_window=5,
         recombine=1.0,
         selection_scenes=0,
+        average_from=0.5,
+        weight_decay=1e-4,
     )
     a = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     b = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     for (name, x), (_, y) in zip(a.model.state_dict().items(), b.model.state_dict().items(), strict=True):
         assert torch.equal(x, y), name
+
+
+def test_weight_averaging_is_the_final_state_and_excludes_selection(tmp_path) -> None:
+    data = tiny_corpus(variants=2)
+    options = EndToEndOptions(auditory_epochs=1, perception_epochs=4, average_from=0.0)
+    last = train_end_to_end(data, prepare(data, tiny_config()), seed=2, options=options).model
+    trained = train_end_to_end(
+        data, prepare(data, tiny_config()), seed=2, options=replace(options, average_from=0.5)
+    )
+    averaged = trained.model
+    assert not torch.equal(last.visual.weight, averaged.visual.weight)
+    assert trained.meta["selection"]["sense_of_slot_is_s"]  # the learned sense of each slot
+    checkpoint.save(averaged, tmp_path / "m", trained.meta)  # nothing but the model's tensors
+    reloaded, _ = checkpoint.load(tmp_path / "m")
+    for (name, x), (_, y) in zip(averaged.state_dict().items(), reloaded.state_dict().items(), strict=True):
+        assert torch.equal(x, y), name
+    with pytest.raises(ValueError, match="selection_scenes"):
+        replace(options, average_from=0.5, selection_scenes=2)
 
 
 def test_plain_end_to_end_trains_everything_through_the_auditory_loss() -> None:

@@ -9,15 +9,22 @@ from tiny_corpus import tiny_config, tiny_corpus
 from model.config import MTRNNConfig, TrainingConfig
 from model.encoding.utterance import PHONEMES, encode_utterance
 from model.mtrnn import MTRNN, context_abstraction_loss
+from model.multimtrnn import CellAssemblies
 from model.training import (
     GENERATION_MARGIN,
     MODES,
+    FaithfulOptions,
     ProgressReporter,
+    assemblies_loss,
+    distinct_rows,
     encode_utterances,
+    fit_assemblies,
     generation_steps,
     register_mode,
+    solve_assemblies,
     train,
     train_encoder,
+    train_faithful,
 )
 
 
@@ -151,3 +158,86 @@ def test_epochs_scale_multiplies_every_stage():
     scaled = TrainingConfig().scaled(0.1)
     assert (scaled.epochs_auditory, scaled.epochs_somatosensory, scaled.epochs_assemblies) == (150, 40, 200)
     assert TrainingConfig().scaled(1e-9).epochs_visual == 1
+
+
+def test_recordings_of_one_sentence_share_one_auditory_context():
+    """3.3: c_a,0 is trained per sentence, so a scene's recordings get the same c_a,0 (and the
+    progress reports still show one row per recording)."""
+    data = tiny_corpus(variants=2)
+    reports = []
+    result = train(data, "faithful", tiny_config(epochs=3), seed=0, progress=reports.append)
+    c0 = result.csc["auditory_c0"]
+    assert c0.shape == (24, result.model.config.auditory.csc)
+    for i in range(0, 24, 2):  # tiny_corpus lists a scene's variants next to each other
+        assert data.utterances[i] == data.utterances[i + 1]
+        assert (c0[i] == c0[i + 1]).all()
+    assert len(set(map(tuple, c0.tolist()))) == 12
+    last = [r for r in reports if r["stage"] == "auditory"][-1]["csc"]
+    assert torch.allclose(torch.tensor(last), torch.as_tensor(c0))
+
+
+def test_distinct_rows_maps_each_recording_to_its_sentence():
+    sentences, rows = distinct_rows(["a.", "b.", "a.", "c.", "b."])
+    assert sentences == ["a.", "b.", "c."] and rows.tolist() == [0, 1, 0, 2, 1]
+
+
+def test_scene_targets_are_shared_by_the_recordings_of_a_scene():
+    net, x, lengths = _encoder_and_inputs()
+    groups = torch.tensor([0, 0, 1, 1, 2, 2])
+    reports = []
+    table = train_encoder(
+        net,
+        x,
+        lengths,
+        1e-3,
+        TrainingConfig(),
+        torch.Generator().manual_seed(7),
+        ProgressReporter(reports.append, 1, []),
+        "s",
+        2,
+        groups,
+    )
+    assert table.shape == (3, net.cfg.csc)
+    shown = torch.tensor(reports[-1]["csc"])
+    assert shown.shape == (6, net.cfg.csc) and torch.equal(shown[0], shown[1])
+
+
+def test_faithful_options_default_to_the_paper_and_are_recorded():
+    data = tiny_corpus(variants=2)
+    default = train(data, "faithful", tiny_config(epochs=2), seed=0)
+    assert default.meta["faithful"] == {"perception_targets": "recording", "assemblies_solver": "lms"}
+    assert len({tuple(r) for r in default.csc["somatosensory_cT"].tolist()}) == 24
+    options = FaithfulOptions(perception_targets="scene", assemblies_solver="optimum")
+    config = tiny_config(epochs=2)
+    config.generation_steps = default.model.config.generation_steps
+    shared = train_faithful(data, config, 0, None, options)
+    assert shared.meta["faithful"] == {"perception_targets": "scene", "assemblies_solver": "optimum"}
+    assert len({tuple(r) for r in shared.csc["somatosensory_cT"].tolist()}) == 12
+    with pytest.raises(ValueError, match="perception_targets"):
+        train_faithful(data, config, 0, None, FaithfulOptions(perception_targets="nope"))
+
+
+def test_optimum_assemblies_recover_a_linear_association_exactly():
+    g = torch.Generator().manual_seed(0)
+    c_s, c_v = torch.randn(40, 3, generator=g), torch.randn(40, 2, generator=g)
+    truth = CellAssemblies(3, 2, 4, weight_init=2.0, seed=1)
+    with torch.no_grad():
+        c_a0 = truth(c_s, c_v)
+    fitted = CellAssemblies(3, 2, 4, seed=2)
+    loss = solve_assemblies(fitted, c_s, c_v, c_a0)
+    assert loss < 1e-10 and assemblies_loss(fitted, c_s, c_v, c_a0).item() < 1e-10
+    assert torch.allclose(fitted.weight, truth.weight, atol=1e-4)
+
+
+def test_optimum_assemblies_reach_a_lower_lms_error_than_rprop_epochs():
+    """eq. (16) solved to convergence is at most the error a fixed RPROP budget reaches."""
+    g = torch.Generator().manual_seed(3)
+    c_s, c_v, c_a0 = (
+        torch.randn(30, 3, generator=g),
+        torch.randn(30, 2, generator=g),
+        3 * torch.randn(30, 4, generator=g),
+    )
+    descended = CellAssemblies(3, 2, 4, seed=2)
+    fit_assemblies(descended, c_s, c_v, c_a0, TrainingConfig(), ProgressReporter(None, 1, []), 200)
+    solved = CellAssemblies(3, 2, 4, seed=2)
+    assert solve_assemblies(solved, c_s, c_v, c_a0) < assemblies_loss(descended, c_s, c_v, c_a0).item()
