@@ -638,7 +638,8 @@ def contact_sheet(rows: list[tuple[str, list[tuple[str, np.ndarray]]]], path: Pa
             )
             cv2.putText(sheet, label, (x + 3, y + 12), font, 0.36, (0, 0, 0), 1, cv2.LINE_AA)
     path.parent.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(path), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    quality = [cv2.IMWRITE_JPEG_QUALITY, 88] if path.suffix.lower() in (".jpg", ".jpeg") else []
+    cv2.imwrite(str(path), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR), quality)
     return path
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from typing import Literal
 
 # Scaled logistic of the paper (3.4.3, after Heinrich & Wermter 2014), see `model.mtrnn.scaled_logistic`.
@@ -103,6 +103,9 @@ class MultiMTRNNConfig:
     # T_a of closed-loop generation: the longest training utterance's encoding + a margin. Set by
     # training (`model.training.generation_steps`); stored here so a checkpoint carries it.
     generation_steps: int = 60
+    # Named options of the training mode (fields of model.end_to_end.EndToEndOptions or
+    # model.training.FaithfulOptions); empty means the mode's defaults (the paper's, for faithful).
+    options: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -115,4 +118,14 @@ class MultiMTRNNConfig:
             visual=MTRNNConfig(**d["visual"]),
             training=TrainingConfig(**d["training"]),
             generation_steps=int(d.get("generation_steps", 60)),
+            options=dict(d.get("options") or {}),
         )
+
+
+def mode_options(options_class: type, config: MultiMTRNNConfig) -> object:
+    """`options_class` (a mode's options dataclass) built from `config.options`, named errors."""
+    known = {f.name for f in fields(options_class)}
+    unknown = sorted(set(config.options) - known)
+    if unknown:
+        raise ValueError(f"unknown {options_class.__name__} option(s) {unknown}; known: {sorted(known)}")
+    return options_class(**config.options)

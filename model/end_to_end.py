@@ -59,7 +59,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from model.config import MultiMTRNNConfig
+from model.config import MultiMTRNNConfig, mode_options
 from model.data import SequenceSet
 from model.evaluation import scene_key
 from model.mtrnn import MTRNN, kl_divergence, scaled_logistic
@@ -600,7 +600,7 @@ def train_end_to_end(
     options: EndToEndOptions | None = None,
 ) -> TrainedModel:
     """The `end_to_end` mode (module docstring); `config` comes from `model.training.prepare`."""
-    options = options or EndToEndOptions()
+    options = options or mode_options(EndToEndOptions, config)
     training = config.training
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)

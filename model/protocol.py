@@ -75,7 +75,9 @@ def apply_overrides(config: Mapping[str, Any], overrides: Mapping[str, Any]) -> 
             if not isinstance(node, dict) or part not in node:
                 raise KeyError(f"unknown config key {dotted!r} (no {part!r})")
             node = node[part]
-        if not isinstance(node, dict) or leaf not in node:
+        # a mode's named options ("options.recombine") may be absent from the defaults: the mode
+        # validates them when it builds its options dataclass
+        if not isinstance(node, dict) or (leaf not in node and path != ["options"]):
             raise KeyError(f"unknown config key {dotted!r}")
         node[leaf] = value
     return out

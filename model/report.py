@@ -328,10 +328,10 @@ def _explain(mode: str, split: str, metric: str, ours: float, paper: float, budg
     )
     if mode == "faithful" and split == "train":
         why = (
-            "the staged recipe gives every training sentence its own c_a,0 and then fits a linear map "
-            "(eqs. 16-17) from the separately self-organised c_s,T, c_v,T to it, and a per-sequence c_a,0 is "
-            "not a linear function of perception, so training scenes are reproduced only approximately"
-            + budget
+            "the LMS cell assemblies (eq. 16, Table 1's RPROP for a fixed number of epochs) stop far "
+            "from their own minimum: the abstracted c_s,T, c_v,T are small, so f(c) sits near 0.5 and a "
+            "sign-based optimiser crawls; fitted to convergence (option assemblies_solver='optimum') "
+            "training scenes are reproduced far better (docs/experiments/faithful.md)" + budget
         )
         if better:
             why = corpus + budget
@@ -344,19 +344,21 @@ def _explain(mode: str, split: str, metric: str, ours: float, paper: float, budg
         )
     elif mode == "end_to_end":
         why = (
-            "end_to_end trains the cell assemblies through the auditory loss (the authors' 2020 "
-            "follow-up) and its encoders learn which words the teacher said, so the perception codes keep "
-            "action, colour and object; the paper had no such mode"
+            "end_to_end trains the cell assemblies through what the teacher said (the authors' 2020 "
+            "follow-up), and its encoders also learn from recombined pairs of recordings, so each sense "
+            "answers only the words it can perceive and the codes keep action, colour and object on novel "
+            "scenes (docs/experiments/end_to_end.md); the paper had no such mode"
         )
         if not better:
             why += "; its generator still garbles some phonemes of sentences it composes correctly by word"
     else:
         why = (
-            "the peer is a GRU encoder-decoder with bound latent codes (no timescales, no self-organisation) "
-            "and with this report's budget (see above) it is undertrained"
+            "the peer is a GRU encoder-decoder trained closed-loop; it fits its training scenes, but its "
+            "fused code has no cross-modal recombination, so on novel combinations one sense's memorised "
+            "opinion about a slot it cannot perceive often wins"
             if not better
-            else "the peer's GRU decoder, conditioned on a fused code at every step, emits the frequent "
-            "words of the grammar even when the scene is novel, which phoneme F1 partly credits"
+            else f"{corpus}, and the peer, trained closed-loop on every training recording, binds its "
+            "perception code to the whole utterance"
         )
     return f"{mode} {split} {metric}: {ours:.3f}, {size}, most likely because {why}."
 

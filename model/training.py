@@ -35,7 +35,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from model.config import MultiMTRNNConfig, TrainingConfig
+from model.config import MultiMTRNNConfig, TrainingConfig, mode_options
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES, Lexicon, encode_utterance
 from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
@@ -357,7 +357,7 @@ def train_faithful(
     options: FaithfulOptions | None = None,
 ) -> TrainedModel:
     """The paper's staged recipe (module docstring)."""
-    options = options or FaithfulOptions()
+    options = options or mode_options(FaithfulOptions, config)
     if options.perception_targets not in ("recording", "scene"):
         raise ValueError(f"unknown perception_targets {options.perception_targets!r}")
     if options.assemblies_solver not in ("lms", "optimum"):

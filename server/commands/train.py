@@ -22,8 +22,26 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", type=Path, required=True, help="checkpoint directory to write")
     parser.add_argument("--epochs-scale", type=float, default=1.0, help="multiply every stage's epochs")
     parser.add_argument("--corpus", type=Path, default=None, help="corpus .npz (default: the shipped one)")
+    parser.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a named option of the mode, e.g. assemblies_solver=optimum (faithful) or recombine=0 "
+        "(end_to_end); repeatable",
+    )
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
     parser.set_defaults(func=_train)
+
+
+def _option(text: str) -> tuple[str, object]:
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise ValueError(f"--option takes KEY=VALUE, got {text!r}")
+    try:
+        return key, json.loads(value)
+    except json.JSONDecodeError:
+        return key, value
 
 
 def _train(args: argparse.Namespace) -> int:
@@ -42,6 +60,11 @@ def _train(args: argparse.Namespace) -> int:
         return 2
     config = MultiMTRNNConfig()
     config.training = config.training.scaled(args.epochs_scale)
+    try:
+        config.options = dict(_option(o) for o in args.option)
+    except ValueError as err:
+        print(f"error: {err}")
+        return 2
     data = corpus.training_data()
 
     bars: dict[str, tqdm] = {}
@@ -56,7 +79,11 @@ def _train(args: argparse.Namespace) -> int:
         bar.update(report["epoch"] - bar.n)
         bar.set_postfix(loss=f"{report['loss']:.4g}")
 
-    result = run_once(data, args.mode, args.fold, args.seed, config, out_dir=args.out, progress=progress)
+    try:
+        result = run_once(data, args.mode, args.fold, args.seed, config, out_dir=args.out, progress=progress)
+    except ValueError as err:  # e.g. an unknown --option
+        print(f"error: {err}")
+        return 2
     for bar in bars.values():
         bar.close()
     if args.json:

@@ -217,6 +217,18 @@ def test_faithful_options_default_to_the_paper_and_are_recorded():
         train_faithful(data, config, 0, None, FaithfulOptions(perception_targets="nope"))
 
 
+def test_mode_options_are_selectable_through_the_config():
+    data = tiny_corpus(variants=2)
+    config = tiny_config(epochs=2)
+    config.options = {"assemblies_solver": "optimum"}
+    trained = train(data, "faithful", config, seed=0)
+    assert trained.meta["faithful"]["assemblies_solver"] == "optimum"
+    assert trained.model.config.options == {"assemblies_solver": "optimum"}
+    config.options = {"solver": "optimum"}
+    with pytest.raises(ValueError, match=r"unknown FaithfulOptions option\(s\) \['solver'\]"):
+        train(data, "faithful", config, seed=0)
+
+
 def test_optimum_assemblies_recover_a_linear_association_exactly():
     g = torch.Generator().manual_seed(0)
     c_s, c_v = torch.randn(40, 3, generator=g), torch.randn(40, 2, generator=g)
