@@ -94,8 +94,13 @@ def test_shipped_corpus_has_all_recordings_and_fits_in_20_mb() -> None:
 
 @pytest.mark.skipif(not DEFAULT_PATH.is_file(), reason="shipped corpus not built yet")
 def test_shipped_corpus_matches_the_current_world_and_encoders() -> None:
-    """Guards against drift: a rebuilt recording of the shipped corpus encodes to the stored features."""
+    """Guards against drift: a rebuilt recording of the shipped corpus encodes to the stored features.
+
+    Up to floating-point noise between machines: IK differs in the last bits (1e-15 rad) and a
+    CPU-specific OpenCV kernel may flip an edge pixel, so features must agree closely, not bitwise.
+    """
     entry = load_corpus().by_id(IDS[0])
     rec = export_recording(IDS[0], seed=0)
-    np.testing.assert_array_equal(rec.joints, entry.joints)
-    np.testing.assert_array_equal(encode_frames(rec.frames, workers=1), entry.vision)
+    np.testing.assert_allclose(rec.joints, entry.joints, rtol=0, atol=1e-9)
+    vision_error = np.abs(encode_frames(rec.frames, workers=1) - entry.vision)
+    assert vision_error.mean() < 1e-3 and vision_error.max() < 0.05
