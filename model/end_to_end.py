@@ -39,7 +39,8 @@ Training, top to bottom (`train_end_to_end`):
    (`recombination_loss`): nobody tells the learner which sense carries which slot, but an
    encoder that memorised what it cannot perceive is wrong on recombined pairs, so it unlearns it.
    `weight_decay` adds an L2 penalty on the weight matrices; `average_from` makes the final
-   perception weights the running mean of the weights over the last epochs (Polyak averaging).
+   perception weights the running mean of the weights over the last epochs (Polyak averaging);
+   `time_warp` replays every recording at its own random speed each epoch (another teacher's tempo).
 3. Joint stage (`joint_epochs`): perception -> CAs -> MTRNN_a, everything through the auditory
    loss (plus the word loss when on). With `word_loss` off this is the only stage: the plain
    2020-style end-to-end training that the options are measured against.
@@ -94,11 +95,12 @@ class EndToEndOptions:
     select_every: int = 10  # epochs between two selections
     input_noise: float = 0.0  # std of Gaussian noise on the (normalised) encoder inputs, per epoch
     vision_window: int = 0  # > 0: MTRNN_v learns from a random window of this many frames per epoch
+    time_warp: float = 0.0  # > 0: every epoch each recording replays at a random speed in [1 -+ w]
     recombine: float = 1.0  # weight of the word loss on recombined pairs (`recombination_loss`)
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
-    auditory_epochs: int = 1000  # stage 1
+    auditory_epochs: int = 2000  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
 
@@ -342,7 +344,7 @@ def selection_split(
 
 
 @dataclass
-class _Perception:
+class PerceptionBatch:
     """What the perception stage reads: padded (normalised) inputs and the heard words."""
 
     proprioception: Tensor
@@ -351,10 +353,10 @@ class _Perception:
     vision_lengths: Tensor
     heard: Tensor  # p* [B, words]
 
-    def subset(self, idx: list[int]) -> _Perception:
-        return _Perception(*(getattr(self, f.name)[idx] for f in fields(self)))
+    def subset(self, idx: list[int]) -> PerceptionBatch:
+        return PerceptionBatch(*(getattr(self, f.name)[idx] for f in fields(self)))
 
-    def with_noise(self, std: float, generator: torch.Generator) -> _Perception:
+    def with_noise(self, std: float, generator: torch.Generator) -> PerceptionBatch:
         """The same recordings with Gaussian noise of `std` on every input."""
 
         def noisy(x: Tensor) -> Tensor:
@@ -362,7 +364,35 @@ class _Perception:
 
         return replace(self, proprioception=noisy(self.proprioception), vision=noisy(self.vision))
 
-    def vision_windows(self, width: int, generator: torch.Generator) -> _Perception:
+    def time_warped(self, warp: float, generator: torch.Generator) -> PerceptionBatch:
+        """Each recording (both senses) replayed at its own random speed in [1 - warp, 1 + warp],
+        by linear interpolation between steps: the tempo of another teacher."""
+        speed = 1 + warp * (2 * torch.rand(len(self.heard), generator=generator) - 1)
+
+        def replay(x: Tensor, lengths: Tensor) -> tuple[Tensor, Tensor]:
+            new_lengths = (lengths / speed).round().long().clamp(min=2)
+            last = (lengths - 1)[:, None].float()
+            at = torch.arange(int(new_lengths.max()))[None, :] * last / (new_lengths - 1)[:, None]
+            at = torch.minimum(at, last)
+            before = at.floor().long()
+            after = torch.minimum(before + 1, last.long())
+            share = (at - before)[..., None]
+            rows = torch.arange(len(x))[:, None]
+            out = x[rows, before] * (1 - share) + x[rows, after] * share
+            padding = torch.arange(out.shape[1])[None, :] >= new_lengths[:, None]
+            return out.masked_fill(padding[..., None], 0.0), new_lengths
+
+        proprioception, proprioception_lengths = replay(self.proprioception, self.proprioception_lengths)
+        vision, vision_lengths = replay(self.vision, self.vision_lengths)
+        return replace(
+            self,
+            proprioception=proprioception,
+            proprioception_lengths=proprioception_lengths,
+            vision=vision,
+            vision_lengths=vision_lengths,
+        )
+
+    def vision_windows(self, width: int, generator: torch.Generator) -> PerceptionBatch:
         """Each recording's vision cut to a random window of `width` frames (whole if shorter)."""
         lengths = self.vision_lengths.clamp(max=width)
         room = (self.vision_lengths - lengths + 1).float()
@@ -401,7 +431,7 @@ def train_auditory_stage(
 
 
 def perception_logits(
-    model: MultiMTRNN, assemblies: WordAssemblies, data: _Perception, points: int, start: float
+    model: MultiMTRNN, assemblies: WordAssemblies, data: PerceptionBatch, points: int, start: float
 ) -> tuple[Tensor, Tensor]:
     """Each encoder's share of eq. (17) at the reading points: z_s, z_v [B, points, words]."""
     c_s = csc_at(
@@ -485,8 +515,8 @@ def recombination_loss(
 def train_perception_stage(
     model: MultiMTRNN,
     assemblies: WordAssemblies,
-    fit: _Perception,
-    held_out: _Perception | None,
+    fit: PerceptionBatch,
+    held_out: PerceptionBatch | None,
     options: EndToEndOptions,
     report: ProgressReporter,
     generator: torch.Generator,
@@ -516,6 +546,8 @@ def train_perception_stage(
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         seen = fit.with_noise(options.input_noise, generator) if options.input_noise > 0 else fit
+        if options.time_warp > 0:
+            seen = seen.time_warped(options.time_warp, generator)
         if options.vision_window > 0:
             seen = seen.vision_windows(options.vision_window, generator)
         z_s, z_v = perception_logits(model, assemblies, seen, options.word_points, options.word_from)
@@ -569,7 +601,7 @@ def train_perception_stage(
 def train_joint_stage(
     model: MultiMTRNN,
     assemblies: WordAssemblies,
-    data: _Perception,
+    data: PerceptionBatch,
     utterances: Tensor,
     options: EndToEndOptions,
     report: ProgressReporter,
@@ -626,7 +658,7 @@ def train_end_to_end(
             InputNormaliser.fit(batch.proprioception, batch.proprioception_lengths),
             InputNormaliser.fit(batch.vision, batch.vision_lengths),
         )
-    perception = _Perception(
+    perception = PerceptionBatch(
         normalisers[0](batch.proprioception) if normalisers else batch.proprioception,
         batch.proprioception_lengths,
         normalisers[1](batch.vision) if normalisers else batch.vision,

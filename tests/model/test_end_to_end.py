@@ -16,6 +16,7 @@ from model.config import MTRNNConfig
 from model.end_to_end import (
     EndToEndOptions,
     InputNormaliser,
+    PerceptionBatch,
     WordAssemblies,
     WordSlots,
     calibrate,
@@ -183,6 +184,21 @@ def test_training_records_options_and_describes_through_the_model_path(tmp_path)
         np.testing.assert_array_equal(b.activity, a.activity)
 
 
+def test_time_warp_replays_each_recording_at_its_own_speed() -> None:
+    ramp = torch.arange(10.0).reshape(1, 10, 1).repeat(3, 1, 2)
+    lengths = torch.tensor([10, 6, 3])
+    seen = PerceptionBatch(ramp, lengths, ramp.clone(), lengths.clone(), torch.zeros(3, 4))
+    warped = seen.time_warped(0.5, torch.Generator().manual_seed(1))
+    assert torch.equal(warped.proprioception_lengths, warped.vision_lengths)
+    for x, n, old in zip(warped.proprioception, warped.proprioception_lengths, lengths, strict=True):
+        assert 0.5 * old - 1 <= n <= 2 * old + 1
+        steps = x[:n, 0]  # a ramp stays a ramp from the first to the last original step
+        assert steps[0] == 0 and torch.isclose(steps[-1], old - 1.0)
+        assert torch.allclose(steps.diff(), steps.diff()[0].expand(n - 1), atol=1e-5)
+        assert (x[n:] == 0).all()
+    assert not torch.equal(warped.proprioception_lengths, lengths)
+
+
 def test_mode_is_registered_and_deterministic() -> None:
     assert "end_to_end" in available_modes()
     assert MODES["end_to_end"] is train_end_to_end
@@ -192,6 +208,7 @@ def test_mode_is_registered_and_deterministic() -> None:
         perception_epochs=2,
         input_noise=0.1,
         vision_window=5,
+        time_warp=0.3,
         recombine=1.0,
         selection_scenes=0,
         average_from=0.5,
