@@ -100,7 +100,7 @@ class EndToEndOptions:
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
-    auditory_epochs: int = 2000  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
+    auditory_epochs: int = 1500  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
 
