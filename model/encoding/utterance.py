@@ -181,6 +181,9 @@ def decode_activity(activity: np.ndarray, threshold: float = 0.3) -> list[str]:
     return phonemes
 
 
+NEAREST_MEMO = 4096  # decoded segments remembered per lexicon (a describe has ~5)
+
+
 class Lexicon:
     """The words an utterance may contain, with their phonemes, for decoding phonemes to words."""
 
@@ -190,6 +193,7 @@ class Lexicon:
             raise ValueError("a Lexicon needs at least one word")
         self.words: tuple[str, ...] = tuple(unique)
         self.pronunciations: dict[str, tuple[str, ...]] = {w: tuple(pronounce(w)) for w in unique}
+        self._nearest: dict[tuple[str, ...], str] = {}  # segment -> word, memoised (bounded)
 
     @classmethod
     def from_sentences(cls, sentences: Iterable[str]) -> Lexicon:
@@ -198,7 +202,13 @@ class Lexicon:
 
     def nearest(self, segment: Sequence[str]) -> str:
         """The lexicon word whose phonemes are nearest to `segment` (weighted edit distance)."""
-        return min(self.words, key=lambda w: raw_edit_distance(segment, self.pronunciations[w]))
+        key = tuple(segment)
+        word = self._nearest.get(key)
+        if word is None:
+            word = min(self.words, key=lambda w: raw_edit_distance(key, self.pronunciations[w]))
+            if len(self._nearest) < NEAREST_MEMO:
+                self._nearest[key] = word
+        return word
 
     def phonemes_to_words(self, phonemes: Sequence[str]) -> list[str]:
         """Split on SIL and punctuation signs; each segment -> nearest word; signs -> '.', '!', '?'."""

@@ -128,3 +128,13 @@ def test_lexicon_maps_a_garbled_word_to_the_nearest_entry(lexicon: Lexicon) -> N
     words = lexicon.phonemes_to_words(phonemes)
     assert words == ["push", "the", "blue", "apple", "."]
     assert Lexicon.words_to_text(words) == "push the blue apple."
+
+
+def test_lexicon_remembers_decoded_segments_up_to_its_bound(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("model.encoding.utterance.NEAREST_MEMO", 2)
+    lexicon = Lexicon(["blue", "red", "apple"])
+    segments = [["B", "L", "UH"], ["R", "EH"], ["AE", "P", "L"]]
+    first = [lexicon.nearest(s) for s in segments]
+    assert first == ["blue", "red", "apple"]
+    assert [lexicon.nearest(s) for s in segments] == first  # the memo answers as the search did
+    assert len(lexicon._nearest) == 2
