@@ -95,7 +95,7 @@ class EndToEndOptions:
     select_every: int = 10  # epochs between two selections
     input_noise: float = 0.0  # std of Gaussian noise on the (normalised) encoder inputs, per epoch
     vision_window: int = 0  # > 0: MTRNN_v learns from a random window of this many frames per epoch
-    time_warp: float = 0.0  # > 0: every epoch each recording replays at a random speed in [1 -+ w]
+    time_warp: float = 0.0  # > 0: every epoch each recording replays at a random speed in [1 - w, 1 + w]
     recombine: float = 1.0  # weight of the word loss on recombined pairs (`recombination_loss`)
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
