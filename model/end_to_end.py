@@ -26,6 +26,10 @@ Training, top to bottom (`train_end_to_end`):
    words the teacher said: the CAs are trained through the auditory loss. All recordings of a
    scene share an utterance and a p*, so each distinct utterance is one sequence (with the same
    number of recordings per scene the mean loss, hence every RPROP sign, is unchanged).
+   The learner then listens to itself (`combinations_said`): spoken to with every combination of
+   heard words, one per slot, does MTRNN_a say those words? If not (RPROP can leave it unable to
+   put, say, "green" before "apple" when it never heard them together), it starts again from new
+   weights, up to `auditory_attempts` times, and keeps the generator that said the most.
 2. Perception stage: MTRNN_s, MTRNN_v and the word units (W_s, W_v, b) learn which words the
    teacher said (the learner hears the utterance), from the Csc states at `word_points` points
    between `word_from` and 100 % of each sequence. The encoders read standardised inputs
@@ -49,6 +53,7 @@ Training, top to bottom (`train_end_to_end`):
 from __future__ import annotations
 
 import copy
+import itertools
 import logging
 import re
 import time
@@ -62,6 +67,7 @@ from torch import Tensor, nn
 
 from model.config import MultiMTRNNConfig, mode_options
 from model.data import SequenceSet
+from model.encoding.utterance import Lexicon, decode_text
 from model.evaluation import scene_key
 from model.mtrnn import MTRNN, kl_divergence, scaled_logistic
 from model.multimtrnn import MultiMTRNN, register_assemblies
@@ -84,8 +90,8 @@ class EndToEndOptions:
     """The named additions of `end_to_end` (module docstring); defaults are the measured best."""
 
     word_loss: bool = True  # perception learns which words the teacher said (stage 2)
-    word_points: int = 8  # Csc states read at this many points of each sequence ...
-    word_from: float = 0.3  # ... evenly from this fraction of its length to its end
+    word_points: int = 4  # Csc states read at this many points of each sequence ...
+    word_from: float = 0.85  # ... evenly from this fraction of its length to its end (0.3 mixed up actions)
     slot_softmax: bool = True  # one word per slot (softmax); False: a logistic per word
     modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
@@ -101,6 +107,7 @@ class EndToEndOptions:
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
     auditory_epochs: int = 1500  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
+    auditory_attempts: int = 3  # MTRNN_a restarts from new weights until it says every word combination
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
 
@@ -225,6 +232,12 @@ class WordAssemblies(nn.Module):
     @property
     def words(self) -> list[str]:
         return [w for s in self._kwargs["slots"] for w in s]
+
+    @torch.no_grad()
+    def redraw_projection(self, generator: torch.Generator) -> None:
+        """New initial E, e (a fresh start of the auditory stage)."""
+        for p in (self.projection, self.projection_bias):
+            p.copy_((torch.rand(p.shape, generator=generator) * 2 - 1) * self._kwargs["weight_init"])
 
     def init_kwargs(self) -> dict:
         return copy.deepcopy(self._kwargs)
@@ -428,6 +441,69 @@ def train_auditory_stage(
         loss.backward()
         optimiser.step()
         report("auditory", epoch, epochs, loss.item())
+
+
+@torch.no_grad()
+def combinations_said(
+    model: MultiMTRNN, assemblies: WordAssemblies, slots: WordSlots, lexicon: Lexicon
+) -> float:
+    """The learner listens to itself: the share of all word combinations (one heard phrase per
+    slot, most never heard together) that MTRNN_a, spoken to from c_a,0 = E p + e, says back so
+    that its decoded words hold exactly those phrases. Needs nothing but the heard words."""
+    combinations = list(itertools.product(*(range(n) for n in slots.sizes)))
+    offsets = np.cumsum([0, *slots.sizes[:-1]])
+    p = torch.zeros(len(combinations), sum(slots.sizes))
+    for row, combination in enumerate(combinations):
+        p[row, offsets + np.array(combination)] = 1.0
+    activity = model.generate(assemblies.speak(p)).numpy()
+    said = [_says(slots, decode_text(a, lexicon)[2], c) for a, c in zip(activity, combinations, strict=True)]
+    return sum(said) / len(said)
+
+
+def _says(slots: WordSlots, text: str, combination: tuple[int, ...]) -> bool:
+    try:
+        return slots.indices(text) == list(combination)
+    except ValueError:  # a slot without exactly one heard phrase
+        return False
+
+
+def train_generator(
+    model: MultiMTRNN,
+    assemblies: WordAssemblies,
+    utterances: list[str],
+    slots: WordSlots,
+    options: EndToEndOptions,
+    report: ProgressReporter,
+    seed: int,
+) -> dict:
+    """Stage 1 with self-monitoring: up to `auditory_attempts` fresh MTRNN_a (and E, e) are trained
+    until one says every word combination back (`combinations_said`); the best one is kept."""
+    lexicon = Lexicon.from_sentences(utterances)
+    attempts: list[float] = []
+    best: tuple[MTRNN, Tensor, Tensor] | None = None
+    for attempt in range(max(1, options.auditory_attempts)):
+        if attempt > 0:
+            g = torch.Generator().manual_seed(seed * 7919 + attempt)
+            model.auditory = MTRNN(model.config.auditory, g)
+            assemblies.redraw_projection(g)
+        train_auditory_stage(model, assemblies, utterances, slots, options.auditory_epochs, report)
+        said = combinations_said(model, assemblies, slots, lexicon)
+        if best is None or said > max(attempts):
+            best = (
+                model.auditory,
+                assemblies.projection.detach().clone(),
+                assemblies.projection_bias.detach().clone(),
+            )
+        attempts.append(said)
+        if said == 1.0:
+            break
+    assert best is not None
+    model.auditory = best[0]
+    with torch.no_grad():
+        assemblies.projection.copy_(best[1])
+        assemblies.projection_bias.copy_(best[2])
+    log.info("auditory stage: word combinations said per attempt %s", attempts)
+    return {"combinations_said": attempts}
 
 
 def perception_logits(
@@ -670,7 +746,7 @@ def train_end_to_end(
     if options.word_loss:
         start = time.perf_counter()
         utterances = list(dict.fromkeys(data.utterances))  # one sequence per distinct utterance
-        train_auditory_stage(model, assemblies, utterances, slots, options.auditory_epochs, report)
+        generator_check = train_generator(model, assemblies, utterances, slots, options, report, seed)
         seconds["auditory"] = time.perf_counter() - start
 
         start = time.perf_counter()
@@ -696,6 +772,8 @@ def train_end_to_end(
     meta = base_meta(data, config, model, "end_to_end", seed)
     meta["end_to_end"] = asdict(options)
     meta["selection"] = selection
+    if options.word_loss:
+        meta["generator"] = generator_check
     meta["seconds"] = seconds
     model.eval()
     return TrainedModel(model, history, meta)

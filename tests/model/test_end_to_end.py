@@ -3,7 +3,7 @@ normalisation, held-out calibration and a whole (tiny) training that checkpoints
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import numpy as np
 import pytest
@@ -13,6 +13,7 @@ import torch.nn.functional as F
 from data.scenario import all_scenes
 from model import checkpoint
 from model.config import MTRNNConfig
+from model.encoding.utterance import Lexicon
 from model.end_to_end import (
     EndToEndOptions,
     InputNormaliser,
@@ -20,13 +21,14 @@ from model.end_to_end import (
     WordAssemblies,
     WordSlots,
     calibrate,
+    combinations_said,
     reading_points,
     recombination_loss,
     selection_split,
     train_end_to_end,
 )
 from model.multimtrnn import ASSEMBLIES
-from model.training import MODES, available_modes, prepare
+from model.training import MODES, available_modes, encode_utterances, prepare
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 GRAMMAR = [s.utterance for s in all_scenes()]
@@ -160,7 +162,12 @@ def test_selection_holds_out_whole_scenes_and_keeps_every_word() -> None:
 
 def _tiny_options() -> EndToEndOptions:
     return EndToEndOptions(
-        auditory_epochs=4, perception_epochs=4, select_every=2, selection_scenes=2, average_from=0.0
+        auditory_epochs=4,
+        auditory_attempts=2,
+        perception_epochs=4,
+        select_every=2,
+        selection_scenes=2,
+        average_from=0.0,
     )
 
 
@@ -169,7 +176,8 @@ def test_training_records_options_and_describes_through_the_model_path(tmp_path)
     config = prepare(data, tiny_config())
     trained = train_end_to_end(data, config, seed=1, options=_tiny_options())
     assert trained.meta["mode"] == "end_to_end"
-    assert trained.meta["end_to_end"]["word_points"] == 8
+    assert trained.meta["end_to_end"] == asdict(_tiny_options())
+    assert 1 <= len(trained.meta["generator"]["combinations_said"]) <= 2  # 4 epochs say little: a restart
     assert trained.meta["selection"]["epoch"] in (2, 4)
     assert trained.model.config.visual.io == 21  # the centroid option
     assert {h["stage"] for h in trained.history} == {"auditory", "perception"}
@@ -182,6 +190,35 @@ def test_training_records_options_and_describes_through_the_model_path(tmp_path)
     for b, a in zip(before, after, strict=True):
         assert b.text == a.text
         np.testing.assert_array_equal(b.activity, a.activity)
+
+
+class _SpeakingModel:
+    """Stands in for MTRNN_a behind E p + e: says the sentence of each word combination p, except
+    that it calls every "green" thing a "phone" (a phrase it never learned to compose)."""
+
+    def __init__(self, slots: WordSlots, steps: int) -> None:
+        self.slots, self.steps = slots, steps
+
+    def generate(self, p: torch.Tensor) -> torch.Tensor:
+        sentences = []
+        for row in p:
+            action, colour, shape = (
+                slot[int(part.argmax())]
+                for slot, part in zip(self.slots.slots, row.split(self.slots.sizes), strict=True)
+            )
+            shape = "phone" if colour == "green" else shape
+            sentences.append(f"{action} the {colour} {shape}.")
+        return encode_utterances(sentences, self.steps)[0]
+
+
+def test_the_learner_hears_which_word_combinations_its_generator_says() -> None:
+    slots = WordSlots.from_utterances(GRAMMAR)
+    cas = WordAssemblies(2, 2, sum(slots.sizes), [list(s) for s in slots.slots])
+    with torch.no_grad():  # E = identity, e = 0: c_a,0 is p itself
+        cas.projection.copy_(torch.eye(sum(slots.sizes)))
+        cas.projection_bias.zero_()
+    said = combinations_said(_SpeakingModel(slots, 60), cas, slots, Lexicon.from_sentences(GRAMMAR))
+    assert said == 52 / 64  # green apple, banana and dice come out as phones: 4 actions x 3 shapes wrong
 
 
 def test_time_warp_replays_each_recording_at_its_own_speed() -> None:
