@@ -29,7 +29,8 @@ Training, top to bottom (`train_end_to_end`):
    The learner then listens to itself (`combinations_said`): spoken to with every combination of
    heard words, one per slot, does MTRNN_a say those words? If not (RPROP can leave it unable to
    put, say, "green" before "apple" when it never heard them together), it starts again from new
-   weights, up to `auditory_attempts` times, and keeps the generator that said the most.
+   weights, up to `auditory_attempts` times, and keeps the generator that said the most. It also
+   checks itself every `auditory_check_every` epochs and stops as soon as it says them all.
 2. Perception stage: MTRNN_s, MTRNN_v and the word units (W_s, W_v, b) learn which words the
    teacher said (the learner hears the utterance), from the Csc states at `word_points` points
    between `word_from` and 100 % of each sequence. The encoders read standardised inputs
@@ -57,7 +58,7 @@ import itertools
 import logging
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
@@ -108,6 +109,7 @@ class EndToEndOptions:
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
     auditory_epochs: int = 1500  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
     auditory_attempts: int = 3  # MTRNN_a restarts from new weights until it says every word combination
+    auditory_check_every: int = 250  # > 0: it checks itself this often and stops once it says them all
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
     joint_epochs: int = 0  # stage 3
 
@@ -424,8 +426,11 @@ def train_auditory_stage(
     slots: WordSlots,
     epochs: int,
     report: ProgressReporter,
-) -> None:
-    """Stage 1: MTRNN_a and the CAs' projection E, e learn the KLD (3.1.3) from c_a,0 = E p* + e."""
+    says_all: Callable[[], bool] | None = None,
+    check_every: int = 0,
+) -> int:
+    """Stage 1: MTRNN_a and the CAs' projection E, e learn the KLD (3.1.3) from c_a,0 = E p* + e.
+    Every `check_every` epochs it stops early once `says_all()`. Returns the epochs trained."""
     training = model.config.training
     targets, _ = encode_utterances(utterances, model.config.generation_steps)
     words = slots.one_hot(utterances)
@@ -441,6 +446,15 @@ def train_auditory_stage(
         loss.backward()
         optimiser.step()
         report("auditory", epoch, epochs, loss.item())
+        if (
+            says_all is not None
+            and check_every > 0
+            and epoch % check_every == 0
+            and epoch < epochs
+            and says_all()
+        ):
+            return epoch
+    return epochs
 
 
 @torch.no_grad()
@@ -477,16 +491,33 @@ def train_generator(
     seed: int,
 ) -> dict:
     """Stage 1 with self-monitoring: up to `auditory_attempts` fresh MTRNN_a (and E, e) are trained
-    until one says every word combination back (`combinations_said`); the best one is kept."""
+    until one says every word combination back (`combinations_said`, also checked every
+    `auditory_check_every` epochs to stop early); the best one is kept."""
     lexicon = Lexicon.from_sentences(utterances)
+
+    def says_all() -> bool:
+        return combinations_said(model, assemblies, slots, lexicon) == 1.0
+
     attempts: list[float] = []
+    epochs: list[int] = []
     best: tuple[MTRNN, Tensor, Tensor] | None = None
     for attempt in range(max(1, options.auditory_attempts)):
         if attempt > 0:
             g = torch.Generator().manual_seed(seed * 7919 + attempt)
             model.auditory = MTRNN(model.config.auditory, g)
             assemblies.redraw_projection(g)
-        train_auditory_stage(model, assemblies, utterances, slots, options.auditory_epochs, report)
+        epochs.append(
+            train_auditory_stage(
+                model,
+                assemblies,
+                utterances,
+                slots,
+                options.auditory_epochs,
+                report,
+                says_all,
+                options.auditory_check_every,
+            )
+        )
         said = combinations_said(model, assemblies, slots, lexicon)
         if best is None or said > max(attempts):
             best = (
@@ -503,7 +534,7 @@ def train_generator(
         assemblies.projection.copy_(best[1])
         assemblies.projection_bias.copy_(best[2])
     log.info("auditory stage: word combinations said per attempt %s", attempts)
-    return {"combinations_said": attempts}
+    return {"combinations_said": attempts, "epochs": epochs}
 
 
 def perception_logits(
