@@ -326,7 +326,12 @@ def _to_world(local: np.ndarray, xy: np.ndarray, yaw: float, z: float) -> np.nda
 
 
 def _draw_prism(
-    img: np.ndarray, cam: _Camera, app: Appearance, footprint: np.ndarray, z0: float, z1: float,
+    img: np.ndarray,
+    cam: _Camera,
+    app: Appearance,
+    footprint: np.ndarray,
+    z0: float,
+    z1: float,
     rgb: np.ndarray,
 ) -> np.ndarray:
     """Extruded footprint [n,2] (world xy) between heights z0 and z1; returns the top face in pixels."""
@@ -388,8 +393,11 @@ def _draw_apple(
     p = cam.project(np.array([top, stem_tip, leaf_tip, 0.5 * (top + leaf_tip) + [0.003 * c, 0.003 * s, 0.0]]))
     stem_px = max(1, int(round(cam.focal * 0.0022 / cam.depth(top)[0])))
     cv2.line(img, tuple(_pts(p[0])), tuple(_pts(p[1])), (84.0, 58.0, 36.0), stem_px, cv2.LINE_AA, shift=4)
-    _fill(img, np.array([p[0], p[3], p[2], 2 * p[0] - p[3] + (p[2] - p[0]) * 0.6 - (p[0] - p[3]) * 0.2]),
-          _hsv_to_rgb(105.0, 0.65, 0.5) * _shade(np.array([0.0, 0.0, 1.0]), app))
+    _fill(
+        img,
+        np.array([p[0], p[3], p[2], 2 * p[0] - p[3] + (p[2] - p[0]) * 0.6 - (p[0] - p[3]) * 0.2]),
+        _hsv_to_rgb(105.0, 0.65, 0.5) * _shade(np.array([0.0, 0.0, 1.0]), app),
+    )
 
 
 def _draw_object(
@@ -409,8 +417,14 @@ def _draw_object(
         screen = np.array([[sx0, sy], [sx1, sy], [sx1, -sy], [sx0, -sy]])
         uv = cam.project(_to_world(screen, xy, yaw, TABLE_Z + height + 0.0005))
         _fill(img, uv, rgb * 0.42 * up)
-        glare = np.array([uv[0] * 0.8 + uv[1] * 0.2, uv[0] * 0.6 + uv[1] * 0.4, uv[2] * 0.6 + uv[3] * 0.4,
-                          uv[2] * 0.8 + uv[3] * 0.2])
+        glare = np.array(
+            [
+                uv[0] * 0.8 + uv[1] * 0.2,
+                uv[0] * 0.6 + uv[1] * 0.4,
+                uv[2] * 0.6 + uv[3] * 0.4,
+                uv[2] * 0.8 + uv[3] * 0.2,
+            ]
+        )
         _fill(img, glare, rgb * 0.42 * up + 40.0 * app.specular)
     elif shape == "banana":  # a lit ridge and brown tips
         s = np.linspace(-0.8, 0.8, 12)
@@ -594,8 +608,12 @@ def _background(app: Appearance, cam: _Camera, rng: np.random.Generator) -> np.n
     shift = np.array([[1.0, 0.0, _MARGIN], [0.0, 1.0, _MARGIN], [0.0, 0.0, 1.0]])
     size = (app.width + 2 * _MARGIN, app.height + 2 * _MARGIN)
     table = cv2.warpPerspective(
-        texture, shift @ cam.table_homography(), size, flags=cv2.INTER_LINEAR,
-        borderMode=cv2.BORDER_CONSTANT, borderValue=background,
+        texture,
+        shift @ cam.table_homography(),
+        size,
+        flags=cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=background,
     )
     light = cv2.copyMakeBorder(_light_map(app), _MARGIN, _MARGIN, _MARGIN, _MARGIN, cv2.BORDER_REPLICATE)
     return np.clip(table * light[..., None], 0, 255).astype(np.uint8)
@@ -649,7 +667,9 @@ def render_frames(scene: Scene, motion: Motion, appearance: Appearance) -> np.nd
         if app.blur_sigma > 0.3:
             img = cv2.GaussianBlur(img, (0, 0), app.blur_sigma)
         oy, ox = offsets[t]
-        img = cv2.subtract(cv2.add(img, noise_up[oy : oy + app.height, ox : ox + app.width]),
-                           noise_down[oy : oy + app.height, ox : ox + app.width])
+        img = cv2.subtract(
+            cv2.add(img, noise_up[oy : oy + app.height, ox : ox + app.width]),
+            noise_down[oy : oy + app.height, ox : ox + app.width],
+        )
         frames[t] = img
     return frames

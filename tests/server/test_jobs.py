@@ -143,7 +143,8 @@ def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_mar
     try:
         _wait(lambda: _up(base), 60)
         done_id = httpx.post(
-            f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY},
+            f"{base}/api/jobs",
+            json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY},
             timeout=30,
         ).json()["id"]
         _wait(lambda: httpx.get(f"{base}/api/jobs/{done_id}", timeout=30).json()["status"] == "done", 180)
