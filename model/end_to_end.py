@@ -107,7 +107,7 @@ class EndToEndOptions:
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
-    auditory_epochs: int = 1500  # stage 1 (1000 left MTRNN_a misspeaking novel sentences: docs/experiments)
+    auditory_epochs: int = 1500  # stage 1, at most, per attempt (docs/experiments/end_to_end.md, rounds 3-4)
     auditory_attempts: int = 3  # MTRNN_a restarts from new weights until it says every word combination
     auditory_check_every: int = 250  # > 0: it checks itself this often and stops once it says them all
     perception_epochs: int = 300  # stage 2 (the held-out selection keeps the best epoch)
