@@ -180,10 +180,14 @@ class WordSlots:
 
     def one_hot(self, utterances: Sequence[str]) -> Tensor:
         """p*: the heard words as word-unit activity [B, sum(sizes)], one 1 per slot."""
-        out = torch.zeros(len(utterances), sum(self.sizes))
+        return self.activity([self.indices(u) for u in utterances])
+
+    def activity(self, phrases: Sequence[Sequence[int]]) -> Tensor:
+        """Word-unit activity [B, sum(sizes)] of phrase indices per slot [B][slots], one 1 per slot."""
+        out = torch.zeros(len(phrases), sum(self.sizes))
         offsets = np.cumsum([0, *self.sizes[:-1]])
-        for i, u in enumerate(utterances):
-            for offset, k in zip(offsets, self.indices(u), strict=True):
+        for i, indices in enumerate(phrases):
+            for offset, k in zip(offsets, indices, strict=True):
                 out[i, offset + k] = 1.0
         return out
 
@@ -465,11 +469,7 @@ def combinations_said(
     slot, most never heard together) that MTRNN_a, spoken to from c_a,0 = E p + e, says back so
     that its decoded words hold exactly those phrases. Needs nothing but the heard words."""
     combinations = list(itertools.product(*(range(n) for n in slots.sizes)))
-    offsets = np.cumsum([0, *slots.sizes[:-1]])
-    p = torch.zeros(len(combinations), sum(slots.sizes))
-    for row, combination in enumerate(combinations):
-        p[row, offsets + np.array(combination)] = 1.0
-    activity = model.generate(assemblies.speak(p)).numpy()
+    activity = model.generate(assemblies.speak(slots.activity(combinations))).numpy()
     said = [_says(slots, decode_text(a, lexicon)[2], c) for a, c in zip(activity, combinations, strict=True)]
     return sum(said) / len(said)
 
