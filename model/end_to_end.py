@@ -518,7 +518,8 @@ def train_generator(
                 options.auditory_check_every,
             )
         )
-        said = combinations_said(model, assemblies, slots, lexicon)
+        stopped_early = epochs[-1] < options.auditory_epochs  # only once it said them all
+        said = 1.0 if stopped_early else combinations_said(model, assemblies, slots, lexicon)
         if best is None or said > max(attempts):
             best = (
                 model.auditory,
