@@ -34,8 +34,15 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from model.protocol import apply_overrides, data_digest, default_config, plan, run_protocol, runner_for  # noqa: E402
-from model.runstore import RunStore  # noqa: E402
+from model.experiments.protocol import (  # noqa: E402
+    apply_overrides,
+    data_digest,
+    default_config,
+    plan,
+    run_protocol,
+    runner_for,
+)
+from model.experiments.runstore import RunStore  # noqa: E402
 from server.commands.evaluate import load_data, parse_overrides  # noqa: E402
 
 

@@ -142,7 +142,7 @@ def bench_nets(epochs: int, seed: int = 0) -> dict:
 
 def bench_training(modes: list[str], corpus_path: str | None = None, fold: int = 0, seed: int = 0) -> dict:
     from data.corpus import load_corpus
-    from model.evaluation import fold_split
+    from model.experiments.evaluation import fold_split
     from model.training import train
 
     corpus = load_corpus(corpus_path)

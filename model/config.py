@@ -103,7 +103,7 @@ class MultiMTRNNConfig:
     # T_a of closed-loop generation: the longest training utterance's encoding + a margin. Set by
     # training (`model.training.generation_steps`); stored here so a checkpoint carries it.
     generation_steps: int = 60
-    # Named options of the training mode (fields of model.end_to_end.EndToEndOptions or
+    # Named options of the training mode (fields of model.training.end_to_end.EndToEndOptions or
     # model.training.FaithfulOptions); empty means the mode's defaults (the paper's, for faithful).
     options: dict = field(default_factory=dict)
 

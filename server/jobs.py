@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from model.runstore import RunStore
+from model.experiments.runstore import RunStore
 
 logger = logging.getLogger(__name__)
 
@@ -55,7 +55,7 @@ def corpus_data(corpus_path: str | None = None) -> Any:
 
 
 def _resolve(path: str) -> Callable[..., Any]:
-    from model.protocol import resolve
+    from model.experiments.protocol import resolve
 
     return resolve(path)
 
@@ -93,9 +93,9 @@ class _ProgressRelay:
 
 def _train_job(params: dict, events: Any, data: Any, models_dir: Path) -> dict:
     from model import checkpoint
-    from model.evaluation import fold_split, score_split, slot_vocabularies
+    from model.experiments.evaluation import fold_split, score_split, slot_vocabularies
+    from model.experiments.protocol import apply_overrides, default_config
     from model.metrics import parse_slots
-    from model.protocol import apply_overrides, default_config
     from model.training import train
 
     mode, fold, seed = params["mode"], int(params.get("fold", 0)), int(params.get("seed", 0))
@@ -123,7 +123,7 @@ def _train_job(params: dict, events: Any, data: Any, models_dir: Path) -> dict:
 
 
 def _evaluate_job(params: dict, events: Any, data: Any, run_dir: Path) -> dict:
-    from model.protocol import (
+    from model.experiments.protocol import (
         apply_overrides,
         data_digest,
         default_config,
@@ -262,7 +262,7 @@ class JobManager:
                     raise ValueError(f"an evaluation job needs {key} >= 1")
         else:
             raise ValueError(f"unknown job kind {kind!r}: train or evaluate")
-        from model.protocol import apply_overrides, default_config
+        from model.experiments.protocol import apply_overrides, default_config
 
         try:
             apply_overrides(default_config(params["mode"]), params.get("overrides") or {})

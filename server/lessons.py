@@ -573,7 +573,7 @@ def _snapshot(info: dict) -> dict:
 
 
 class CosineJobs:
-    """Live runs of the cosine experiment (`model.cosine`), one at a time (the machine is small).
+    """Live runs of the cosine experiment (`model.experiments.cosine`), one at a time (the machine is small).
     A run is deterministic in (psi, seed), so asking for it again returns the kept run."""
 
     def __init__(
@@ -626,7 +626,7 @@ class CosineJobs:
         return job
 
     def _run(self, job: CosineJob) -> None:
-        from model.cosine import CosineSetup, run_cosine
+        from model.experiments.cosine import CosineSetup, run_cosine
 
         job.status = "running"
         started = time.perf_counter()
@@ -667,9 +667,9 @@ def _clean(rows: list[dict]) -> list[dict]:
 
 def stored_sweeps(run_dir: Path) -> dict:
     """The psi_s sweep (Fig. 9) and the cosine sweep (Fig. 3 a-b) from the protocol's run store,
-    as `model.sweep` tabulates them, if they have been run. Never creates a store."""
-    from model.runstore import DB_NAME, RunStore
-    from model.sweep import cosine_table, psi_s_table
+    as `model.experiments.sweeps` tabulates them, if they have been run. Never creates a store."""
+    from model.experiments.runstore import DB_NAME, RunStore
+    from model.experiments.sweeps import cosine_table, psi_s_table
 
     if not (run_dir / DB_NAME).is_file():
         return {"available": False, "reason": f"no run store at {run_dir} yet", "psi_s": [], "cosine": []}

@@ -22,7 +22,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _cosine(args: argparse.Namespace) -> int:
     import torch
 
-    from model.cosine import run_cosine
+    from model.experiments.cosine import run_cosine
 
     torch.set_num_threads(1)
     summaries = []

@@ -71,7 +71,7 @@ def load_data(corpus_path: Path | None) -> Any:
 
 
 def build_config(overrides: dict[str, Any], mode: str = "faithful") -> dict[str, Any]:
-    from model.protocol import apply_overrides, default_config
+    from model.experiments.protocol import apply_overrides, default_config
 
     try:
         return apply_overrides(default_config(mode), overrides)
@@ -92,8 +92,15 @@ def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from model.protocol import data_digest, default_run_dir, plan, run_protocol, runner_for, summarise
-    from model.runstore import RunStore
+    from model.experiments.protocol import (
+        data_digest,
+        default_run_dir,
+        plan,
+        run_protocol,
+        runner_for,
+        summarise,
+    )
+    from model.experiments.runstore import RunStore
 
     config = build_config(parse_overrides(args.overrides), args.mode)
     data = load_data(args.corpus)

@@ -33,9 +33,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from model.protocol import default_run_dir
-    from model.report import build_report
-    from model.runstore import RunStore
+    from model.experiments.protocol import default_run_dir
+    from model.experiments.report import build_report
+    from model.experiments.runstore import RunStore
 
     store = RunStore(args.run_dir or default_run_dir())
     data = None

@@ -51,9 +51,9 @@ def _fmt(v: float, e: float) -> str:
 
 
 def run_psi_s(args: argparse.Namespace) -> int:
-    from model.protocol import data_digest, default_run_dir
-    from model.runstore import RunStore
-    from model.sweep import PSI_S_PAPER, psi_s_specs, psi_s_table, run_psi_s_sweep
+    from model.experiments.protocol import data_digest, default_run_dir
+    from model.experiments.runstore import RunStore
+    from model.experiments.sweeps import PSI_S_PAPER, psi_s_specs, psi_s_table, run_psi_s_sweep
 
     values = args.values or list(PSI_S_PAPER)
     config = build_config(parse_overrides(args.overrides), args.mode)
@@ -100,9 +100,9 @@ def run_psi_s(args: argparse.Namespace) -> int:
 
 
 def run_cosine(args: argparse.Namespace) -> int:
-    from model.protocol import default_run_dir
-    from model.runstore import RunStore
-    from model.sweep import PSI_COSINE_PAPER, cosine_specs, cosine_table, run_cosine_sweep
+    from model.experiments.protocol import default_run_dir
+    from model.experiments.runstore import RunStore
+    from model.experiments.sweeps import PSI_COSINE_PAPER, cosine_specs, cosine_table, run_cosine_sweep
 
     values = args.values or list(PSI_COSINE_PAPER)
     store = RunStore(args.run_dir or default_run_dir())

@@ -47,7 +47,7 @@ def _option(text: str) -> tuple[str, object]:
 def _train(args: argparse.Namespace) -> int:
     from data.corpus import load_corpus
     from model.config import MultiMTRNNConfig
-    from model.evaluation import run_once
+    from model.experiments.evaluation import run_once
     from model.training import available_modes
 
     if args.mode not in available_modes():

@@ -12,7 +12,7 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Depends, File, HTTPException, Query, Request, UploadFile
 from pydantic import BaseModel, Field
 
-from model.protocol import default_run_dir
+from model.experiments.protocol import default_run_dir
 from server import lessons as L
 from server.schemas import Problem
 from server.state import AppState, get_state
@@ -305,7 +305,7 @@ class Sweeps(BaseModel):
     available: bool = Field(description="whether a psi_s sweep is stored")
     reason: str = Field(description="why not, when it is not")
     psi_s: list[dict[str, Any]] = Field(
-        description="per psi_s: Fig. 9 measures, mean and *_sem (model.sweep)"
+        description="per psi_s: Fig. 9 measures, mean and *_sem (model.experiments.sweeps)"
     )
     cosine: list[dict[str, Any]] = Field(
         description="per psi: Fig. 3 (a, b) measures of the stored cosine sweep"

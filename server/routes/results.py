@@ -1,7 +1,7 @@
 """The results report (`mtrnn report`) for the app's Results page.
 
-    GET    /api/results                the report's figure data (docs/figures/results.json)
-    GET    /api/results/figures/{png}  the report's PNG figures
+GET    /api/results                the report's figure data (docs/figures/results.json)
+GET    /api/results/figures/{png}  the report's PNG figures
 """
 
 from __future__ import annotations

@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 import torch
-from tiny_corpus import tiny_config, tiny_corpus
 
 from model import checkpoint
 from model.training import train
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
 @pytest.fixture(scope="module")

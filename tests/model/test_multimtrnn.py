@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from tiny_corpus import tiny_config, tiny_corpus
 
 from model.encoding.utterance import PHONEMES, Lexicon
 from model.mtrnn import scaled_logistic
 from model.multimtrnn import ASSEMBLIES, CellAssemblies, Description, MultiMTRNN, pad_sequences
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from data.scenario import Scene
-from model.runstore import RunSpec, RunStore
+from model.experiments.runstore import RunSpec, RunStore
 from server.app import create_app
 from tests.server.lesson_world import build, make_state_factory, render
 

@@ -21,12 +21,12 @@ pytestmark = pytest.mark.browser
 
 
 def _report(figures: Path, run_dir: Path) -> None:
-    """A real (tiny) report: one faithful run on the tiny scene set, written by model.report."""
-    from tiny_data import TINY_OVERRIDES, tiny_sequence_set
+    """A real (tiny) report: one faithful run on the tiny scene set, written by model.experiments.report."""
+    from tests.model.tiny_data import TINY_OVERRIDES, tiny_sequence_set
 
-    from model.protocol import apply_overrides, data_digest, default_config, execute_run, plan
-    from model.report import build_report
-    from model.runstore import RunStore
+    from model.experiments.protocol import apply_overrides, data_digest, default_config, execute_run, plan
+    from model.experiments.report import build_report
+    from model.experiments.runstore import RunStore
 
     data = tiny_sequence_set()
     store = RunStore(run_dir)

@@ -23,7 +23,7 @@ import uvicorn
 
 from data.corpus import DEFAULT_PATH
 from data.scenario import Scene
-from model.runstore import RunSpec, RunStore
+from model.experiments.runstore import RunSpec, RunStore
 from server.app import create_app
 from server.settings import Settings
 from tests.server.lesson_world import build, make_state_factory, render
@@ -83,7 +83,7 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, bool
 
 
 def _stored_sweeps(run_dir: Path) -> Path:
-    """A run store holding a small psi_s sweep and cosine sweep, as model.sweep records them."""
+    """A run store holding a small psi_s sweep and cosine sweep, as model.experiments.sweeps records them."""
     store = RunStore(run_dir)
     for k, psi in enumerate((1e-4, 5e-4, 2e-3)):
         for init in range(2):

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from model.protocol import default_config
-from model.runstore import RunRecord
-from model.sweep import (
+from model.experiments.protocol import default_config
+from model.experiments.runstore import RunRecord
+from model.experiments.sweeps import (
     COSINE_RUNNER,
     cosine_run,
     cosine_specs,
@@ -34,7 +34,7 @@ def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None
 def test_cosine_runs_share_seeds_across_psi_and_carry_psi_to_the_runner() -> None:
     specs = cosine_specs([0.0, 5e-5], runs=3)
     assert [s.seed for s in specs[:3]] == [s.seed for s in specs[3:]] == [0, 1, 2]
-    assert COSINE_RUNNER == "model.sweep:cosine_run"
+    assert COSINE_RUNNER == "model.experiments.sweeps:cosine_run"
     result = cosine_run(None, specs[3].mode, specs[3].fold, specs[3].seed)
     m = result.metrics["cosine"]
     assert m["epochs"] > 0 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0

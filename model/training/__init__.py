@@ -19,7 +19,7 @@ Eq. (10) adapts zeta (c_0's rate) in proportion to the mean rate of the weights 
 give c_0 RPROP's own per-element rate adaptation instead (same initial rate, same xi+, xi- and
 bounds), which needs no extra parameters either and follows the same sign rule.
 
-Other modes (`end_to_end`, in `model.end_to_end`) register themselves with `register_mode`.
+Other modes (`end_to_end`, in `model.training.end_to_end`) register themselves with `register_mode`.
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ class TrainedModel:
 
 ModeFn = Callable[[SequenceSet, MultiMTRNNConfig, int, "ProgressFn | None"], TrainedModel]
 MODES: dict[str, ModeFn] = {}
-_PLUGIN_MODULES = ("model.end_to_end", "model.peer")
+_PLUGIN_MODULES = ("model.training.end_to_end", "model.training.peer")
 
 
 def register_mode(name: str, fn: ModeFn) -> None:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from model.report import PAPER, build_report
-from model.runstore import RunSpec, RunStore
+from model.experiments.report import PAPER, build_report
+from model.experiments.runstore import RunSpec, RunStore
 
 
 def _metrics(f1_train: float, f1_test: float) -> dict:

@@ -1,12 +1,12 @@
 """Parameter sweeps of the paper: psi_s over the whole model (4.3, Fig. 9) and psi over the cosine
-experiment (3.2.2, Fig. 3), both as runs of the evaluation engine (`model.protocol`).
+experiment (3.2.2, Fig. 3), both as runs of the evaluation engine (`model.experiments.protocol`).
 
 The psi_s sweep plans K folds x N inits per value with `training.psi_s` set, all in one store
 experiment ("psi_s") so that every value shares the same folds and seeds; its table gives, per
 value, the mixed F1 and edit distance (Fig. 9 a, b), d_avg / d_rel (c) and d_inter / d_intra (d)
 of the somatosensory Csc, each as mean and standard error over runs.
 
-The cosine sweep runs `model.cosine.run_cosine` once per (psi, run) as an engine task, so it
+The cosine sweep runs `model.experiments.cosine.run_cosine` once per (psi, run) as an engine task, so it
 spreads over cores and Ray workers the same way; its table gives epochs, d_avg and d_rel (Fig. 3).
 """
 
@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from model.protocol import Engine, ProgressFn, ProtocolResult, apply_overrides, plan, run_protocol
-from model.runstore import RunRecord, RunSpec, RunStore
+from model.experiments.protocol import Engine, ProgressFn, ProtocolResult, apply_overrides, plan, run_protocol
+from model.experiments.runstore import RunRecord, RunSpec, RunStore
 
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
 PSI_COSINE_PAPER = (0.0, 1e-5, 5e-5, 2e-4)  # Fig. 3 (c-f)
-COSINE_RUNNER = "model.sweep:cosine_run"
+COSINE_RUNNER = "model.experiments.sweeps:cosine_run"
 CSC_SPACE_SWEPT = "somatosensory"  # Fig. 9 (c, d) measure the somatosensory Csc
 
 
@@ -88,7 +88,7 @@ def cosine_run(
 ) -> CosineRunResult:
     """Engine runner for one run of the cosine experiment (3.2.2); the psi travels in `mode`
     ("cosine:<psi>"), so the engine's (data, mode, fold, seed) signature carries everything."""
-    from model.cosine import train_cosine_once
+    from model.experiments.cosine import train_cosine_once
 
     psi = float(mode.split(":", 1)[1])
     started = time.perf_counter()
@@ -110,7 +110,7 @@ def cosine_run(
 
 
 def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list[RunSpec]:
-    """`runs` seeded runs per psi, the same seeds for every psi (paired, as `model.cosine`);
+    """`runs` seeded runs per psi, the same seeds for every psi (paired, as `model.experiments.cosine`);
     mode "cosine:<psi>" carries the value to the runner."""
     return [
         RunSpec(

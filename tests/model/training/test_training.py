@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import pytest
 import torch
-from tiny_corpus import tiny_config, tiny_corpus
 
 from model.config import MTRNNConfig, TrainingConfig
 from model.encoding.utterance import PHONEMES, encode_utterance
@@ -26,6 +25,7 @@ from model.training import (
     train_encoder,
     train_faithful,
 )
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
 def _encoder_and_inputs() -> tuple[MTRNN, torch.Tensor, torch.Tensor]:

@@ -322,11 +322,11 @@ def run_once(
     out_dir: str | Path | None = None,
     progress: Any = None,
 ) -> PeerRunResult:
-    """`model.evaluation.run_once` for the peer: same split, same scoring, same metrics."""
-    from model.evaluation import fold_split, score_split, slot_vocabularies
+    """`model.experiments.evaluation.run_once` for the peer: same split, same scoring, same metrics."""
+    from model.experiments.evaluation import fold_split, score_split, slot_vocabularies
 
     if mode != "peer":
-        raise ValueError(f"model.peer.run_once trains the peer baseline only, not {mode!r}")
+        raise ValueError(f"model.training.peer.run_once trains the peer baseline only, not {mode!r}")
     start = time.perf_counter()
     train_idx, test_idx = fold_split(data.ids, fold, seed=0)
     train_set, test_set = data.subset(train_idx), data.subset(test_idx)

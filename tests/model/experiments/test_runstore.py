@@ -6,7 +6,7 @@ import sqlite3
 
 import pytest
 
-from model.runstore import RunSpec, RunStore
+from model.experiments.runstore import RunSpec, RunStore
 
 
 def _spec(fold: int = 0, init: int = 0, psi: float | None = None) -> RunSpec:

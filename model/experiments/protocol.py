@@ -35,7 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from model.runstore import RunRecord, RunSpec, RunStore
+from model.experiments.runstore import RunRecord, RunSpec, RunStore
 
 logger = logging.getLogger(__name__)
 
@@ -43,7 +43,7 @@ Engine = Literal["local", "ray"]
 ProgressFn = Callable[[dict[str, Any]], None]
 
 # The function a worker calls: run_once(data, mode, fold, seed, config=None, out_dir=None) -> RunResult.
-DEFAULT_RUNNER = "model.evaluation:run_once"
+DEFAULT_RUNNER = "model.experiments.evaluation:run_once"
 SEED_STRIDE = 1000  # seed of (fold, init) = base_seed + SEED_STRIDE * fold + init
 
 
@@ -90,7 +90,7 @@ def _deep_copy(d: Mapping[str, Any]) -> dict[str, Any]:
 def default_config(mode: str = "faithful") -> dict[str, Any]:
     """The full default config of a mode as a dict (the peer has its own sizes)."""
     if mode == "peer":
-        from model.peer import default_config as peer_default
+        from model.training.peer import default_config as peer_default
 
         return peer_default()
     from model.config import MultiMTRNNConfig
@@ -100,7 +100,7 @@ def default_config(mode: str = "faithful") -> dict[str, Any]:
 
 def runner_for(mode: str) -> str:
     """The worker function of a mode: the MultiMTRNN's `run_once`, or the peer baseline's."""
-    return "model.peer:run_once" if mode == "peer" else DEFAULT_RUNNER
+    return "model.training.peer:run_once" if mode == "peer" else DEFAULT_RUNNER
 
 
 def plan(

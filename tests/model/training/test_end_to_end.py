@@ -14,7 +14,9 @@ from data.scenario import all_scenes
 from model import checkpoint
 from model.config import MTRNNConfig
 from model.encoding.utterance import Lexicon
-from model.end_to_end import (
+from model.multimtrnn import ASSEMBLIES
+from model.training import MODES, available_modes, encode_utterances, prepare
+from model.training.end_to_end import (
     EndToEndOptions,
     InputNormaliser,
     PerceptionBatch,
@@ -27,8 +29,6 @@ from model.end_to_end import (
     selection_split,
     train_end_to_end,
 )
-from model.multimtrnn import ASSEMBLIES
-from model.training import MODES, available_modes, encode_utterances, prepare
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 GRAMMAR = [s.utterance for s in all_scenes()]

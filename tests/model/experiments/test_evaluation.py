@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 
 import pytest
-from tiny_corpus import tiny_config, tiny_corpus
 
 from model import checkpoint
-from model.evaluation import fold_split, run_once, scene_key, score
+from model.experiments.evaluation import fold_split, run_once, scene_key, score
 from model.training import train
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 IDS = [
     f"{a}-{c}-{o}-{k}"

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from model.protocol import summarise
-from model.runstore import RunRecord, RunStore
-from model.sweep import cosine_table, psi_s_table
+from model.experiments.protocol import summarise
+from model.experiments.runstore import RunRecord, RunStore
+from model.experiments.sweeps import cosine_table, psi_s_table
 
 logger = logging.getLogger(__name__)
 
@@ -70,10 +70,10 @@ def _budget(runs: Sequence[RunRecord]) -> dict[str, Any]:
     cfg = runs[0].config
     if "training" in cfg:
         budget = {k: v for k, v in cfg["training"].items() if k.startswith("epochs")}
-        if runs[0].mode == "end_to_end":  # its own stages (model.end_to_end.EndToEndOptions)
+        if runs[0].mode == "end_to_end":  # its own stages (model.training.end_to_end.EndToEndOptions)
             from dataclasses import asdict
 
-            from model.end_to_end import EndToEndOptions
+            from model.training.end_to_end import EndToEndOptions
 
             options = cfg.get("end_to_end") or _meta(runs[0]).get("end_to_end") or asdict(EndToEndOptions())
             budget = {f"end_to_end.{k}": v for k, v in options.items() if k.endswith("epochs")}
@@ -267,7 +267,7 @@ def _figure_pca(rows: list[tuple[str, list[dict]]], path: Path, colour_by: str =
 
 def _load_model(run: RunRecord) -> tuple[Any, dict]:
     if run.mode == "peer":
-        from model.peer import load
+        from model.training.peer import load
 
         return load(run.checkpoint)
     from model.checkpoint import load
@@ -706,7 +706,7 @@ def _cosine_sentence(table: list[dict]) -> str:
             "the difference is within the standard errors, so at these psi values self-organisation forcing "
             "changes the spread of the four patterns no more than the random initialisation does "
             "(the paper's "
-            "network size and stopping rule for this experiment are not given; see model.cosine)"
+            "network size and stopping rule for this experiment are not given; see model.experiments.cosine)"
         )
     elif end < start:
         verdict = "large psi pulls the patterns together, as in the paper"

@@ -12,9 +12,8 @@ import time
 from pathlib import Path
 
 import pytest
-from tiny_data import TINY_OVERRIDES, tiny_sequence_set
 
-from model.protocol import (
+from model.experiments.protocol import (
     apply_overrides,
     data_digest,
     default_config,
@@ -24,7 +23,8 @@ from model.protocol import (
     run_seed,
     summarise,
 )
-from model.runstore import RunStore
+from model.experiments.runstore import RunStore
+from tests.model.tiny_data import TINY_OVERRIDES, tiny_sequence_set
 
 HERE = Path(__file__).resolve().parent
 
@@ -107,9 +107,9 @@ DRIVER = textwrap.dedent(
     """
     import sys
     sys.path.insert(0, {here!r})
-    from tiny_data import tiny_sequence_set
-    from model.protocol import apply_overrides, data_digest, default_config, plan, run_protocol
-    from model.runstore import RunStore
+    from tests.model.tiny_data import tiny_sequence_set
+    from model.experiments.protocol import apply_overrides, data_digest, default_config, plan, run_protocol
+    from model.experiments.runstore import RunStore
 
     if __name__ == "__main__":
         data = tiny_sequence_set()
@@ -169,7 +169,7 @@ def test_an_evaluation_killed_midway_finishes_on_restart_with_every_run_exactly_
 
 
 def test_summarise_gives_mean_standard_error_and_extremes_per_split() -> None:
-    from model.runstore import RunRecord
+    from model.experiments.runstore import RunRecord
 
     def run(f1: float) -> RunRecord:
         return RunRecord(

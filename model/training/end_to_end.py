@@ -69,7 +69,7 @@ from torch import Tensor, nn
 from model.config import MultiMTRNNConfig, mode_options
 from model.data import SequenceSet
 from model.encoding.utterance import Lexicon, decode_text
-from model.evaluation import scene_key
+from model.experiments.evaluation import scene_key
 from model.mtrnn import MTRNN, kl_divergence, scaled_logistic
 from model.multimtrnn import MultiMTRNN, register_assemblies
 from model.training import (

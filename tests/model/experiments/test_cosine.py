@@ -8,7 +8,7 @@ import math
 import pytest
 import torch
 
-from model.cosine import CosineSetup, cosine_sequences, run_cosine, train_cosine_once
+from model.experiments.cosine import CosineSetup, cosine_sequences, run_cosine, train_cosine_once
 
 FAST = CosineSetup(cf=4, threshold=1e-3, max_epochs=25, snapshot_every=5)
 

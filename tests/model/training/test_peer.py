@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 import torch
 from safetensors.torch import load_file, save_file
-from tiny_data import tiny_sequence_set
 
-from model.evaluation import fold_split
+from model.experiments.evaluation import fold_split
 from model.multimtrnn import Description
-from model.peer import LEGACY, PeerConfig, PeerModel, load, run_once, save, train_peer
 from model.training import MODES
+from model.training.peer import LEGACY, PeerConfig, PeerModel, load, run_once, save, train_peer
+from tests.model.tiny_data import tiny_sequence_set
 
 FAST = PeerConfig(hidden=32, epochs=20, progress_every=10).to_dict()
 
