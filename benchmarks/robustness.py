@@ -79,10 +79,11 @@ import numpy as np
 
 from data.camera import Appearance, head_angles, project, render_frames
 from data.corpus import load_corpus
-from data.motion import OBJECT_HOME, TABLE_Z, Motion, Teacher, generate_motion
+from data.motion import Motion, Teacher, generate_motion
 from data.nao import JOINT_LIMITS
-from data.recording import CSV_HEADER, FPS, Recording, add_zip_member, read_recording, write_zip
+from data.recording import CSV_HEADER, Recording, add_zip_member, read_recording, write_zip
 from data.scenario import ACTIONS, COLOURS, SHAPES, Scene, all_scenes
+from data.world import FPS, OBJECT_HOME, TABLE_Z
 from model.encoding.proprioception import encode_joints
 from model.encoding.vision import VISUAL_FEATURES, encode_frames_found, pipeline_steps
 

@@ -23,9 +23,10 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
-from data.motion import OBJECT_HOME, OBJECT_SIZE, TABLE_Z, Motion
+from data.motion import Motion
 from data.nao import arm_pose
 from data.scenario import Scene
+from data.world import COLOUR_HUE, OBJECT_HOME, OBJECT_SIZE, TABLE_Z
 
 WIDTH, HEIGHT = 320, 240
 NAO_HFOV = float(np.deg2rad(60.97))  # NAO V5 camera horizontal field of view
@@ -34,13 +35,6 @@ BOTTOM_CAMERA_OFFSET = np.array([0.05071, 0.0, 0.01774])  # CameraBottom in the 
 BOTTOM_CAMERA_PITCH = 0.6929  # CameraBottom looks 39.7 degrees down in the head frame
 HEAD_PITCH_LIMITS = (-0.6720, 0.5149)
 
-# Hue (degrees) of each colour's reference shade and how far a real object's hue may stray from it.
-COLOUR_HUE: dict[str, tuple[float, float]] = {
-    "red": (0.0, 7.0),
-    "yellow": (52.0, 5.0),
-    "green": (125.0, 16.0),
-    "blue": (218.0, 13.0),
-}
 TABLE_KINDS: tuple[str, ...] = ("wood", "plain", "cloth")
 
 NAO_WHITE = np.array([232.0, 232.0, 226.0])

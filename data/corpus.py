@@ -33,13 +33,13 @@ import cv2
 import numpy as np
 
 from data.camera import Appearance, render_frames
+from data.encode import encode_recording
 from data.motion import Teacher, generate_motion
 from data.nao import JOINT_LIMITS
-from data.recording import FPS, Recording, add_zip_member, atomic_write
+from data.recording import Recording, add_zip_member, atomic_write
 from data.scenario import Scene, all_scenes, parse_recording_id, recording_id
+from data.world import FPS
 from model.data import SequenceSet
-from model.encoding.proprioception import encode_joints
-from model.encoding.vision import encode_frames_found
 
 logger = logging.getLogger(__name__)
 
@@ -146,19 +146,19 @@ def _build_one(task: tuple[int, int, int]) -> dict:
     seed, scene_index, variant = task
     scene = all_scenes()[scene_index]
     teacher, appearance, rec = _simulate(seed, scene, variant)
-    vision, found = encode_frames_found(rec.frames, workers=1)
+    features = encode_recording(rec, workers=1)
     return {
         "id": recording_id(scene, variant),
         "joints": rec.joints,
-        "proprioception": encode_joints(rec.joints, JOINT_LIMITS),
-        "vision": vision,
+        "proprioception": features.proprioception,
+        "vision": features.vision,
         "meta": {
             "id": recording_id(scene, variant),
             "scene": scene.id,
             "variant": variant,
             "utterance": scene.utterance,
             "steps": len(rec.joints),
-            "object_found": round(float(found.mean()), 4),
+            "object_found": round(float(features.object_found.mean()), 4),
             "teacher": _params(teacher),
             "appearance": _params(appearance),
         },

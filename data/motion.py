@@ -39,24 +39,14 @@ from data.nao import (
     inverse_kinematics,
 )
 from data.scenario import Scene
+from data.world import FPS, OBJECT_HOME, OBJECT_SIZE, TABLE_Z
 
-FPS = 20
 MIN_DURATION_S = 3.0
 MAX_DURATION_S = 6.0
 
-TABLE_Z = -0.07  # table top, torso frame (0.17 m below the shoulder)
-OBJECT_HOME = np.array([0.114, -0.10])  # nominal object position on the table (x, y)
 HAND_RADIUS = 0.013  # half thickness of the NAO hand: hand centre to object surface at contact
 FINGER_REACH = 0.022  # pushing, the fingertips touch the object: the hand centre stays this much further
 
-# Object footprint and height, metres: (half extent along x, half extent along y, height).
-# The banana lies across the table (long along y), the phone lengthwise (long along x).
-OBJECT_SIZE: dict[str, tuple[float, float, float]] = {
-    "apple": (0.024, 0.024, 0.050),
-    "banana": (0.013, 0.048, 0.026),
-    "dice": (0.020, 0.020, 0.040),
-    "phone": (0.028, 0.017, 0.012),
-}
 
 # Posture every recording starts from (hand raised to the right, above the table's near edge).
 HOME_POSTURE: np.ndarray = inverse_kinematics(np.array([0.15, -0.17, 0.0]))
@@ -125,7 +115,7 @@ class Motion:
     object_xy: np.ndarray  # [T, 2] object centre on the table (torso frame, m)
     object_yaw: np.ndarray  # [T] object rotation about the vertical (rad)
     contact: np.ndarray  # [T] bool, hand is moving the object
-    fps: int = FPS
+    fps: float = FPS
 
     @property
     def duration(self) -> float:

@@ -36,9 +36,9 @@ import numpy as np
 from PIL import Image
 
 from data.nao import JOINT_LIMITS, JOINT_NAMES
+from data.world import FPS
 
 FORMAT_VERSION = 1
-FPS = 20.0  # the model's time step (paper 4.1: 20 frames per second)
 CSV_HEADER: tuple[str, ...] = ("t", *JOINT_NAMES)
 
 MAX_UPLOAD_BYTES = 100 * 1024**2  # size of the .zip / .npz file itself

@@ -7,6 +7,7 @@ MTRNN_MODEL                   the model served first (default: "default", else t
 MTRNN_CORPUS                  encoded corpus file (default: data.corpus's own default)
 MTRNN_VISER                   "0" starts the app without the 3D viewer (scripts, benchmarks)
 MTRNN_FRAME_CACHE             how many corpus recordings keep their re-rendered frames (default 8)
+MTRNN_RUN_DIR                 the run store of evaluations and the app's jobs (default runs/)
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ class Settings:
     frame_cache: int = 8  # corpus recordings whose rendered frames stay in memory
     upload_cache: int = 16  # uploaded recordings kept for their scene view
     web_dir: Path = field(default=WEB_DIR)
+    run_dir: Path = REPO_ROOT / "runs"  # run store (SQLite) of evaluations and jobs
 
     @classmethod
     def from_env(cls, **overrides: object) -> Settings:
@@ -56,5 +58,7 @@ class Settings:
             values["viser"] = os.environ["MTRNN_VISER"] not in ("0", "false", "no")
         if "MTRNN_FRAME_CACHE" in os.environ:
             values["frame_cache"] = int(os.environ["MTRNN_FRAME_CACHE"])
+        if (p := _env_path("MTRNN_RUN_DIR")) is not None:
+            values["run_dir"] = p
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)  # type: ignore[arg-type]

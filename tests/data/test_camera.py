@@ -9,9 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from data.camera import COLOUR_HUE, Appearance, project, render_frames
-from data.motion import TABLE_Z, Motion, Teacher, generate_motion
+from data.camera import Appearance, project, render_frames
+from data.motion import Motion, Teacher, generate_motion
 from data.scenario import COLOURS, SHAPES, Scene
+from data.world import COLOUR_HUE, TABLE_Z
 
 
 def _clean(app: Appearance) -> Appearance:

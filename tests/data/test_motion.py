@@ -7,9 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from data.motion import FPS, HOME_POSTURE, TABLE_Z, Motion, Teacher, generate_motion
+from data.motion import HOME_POSTURE, Motion, Teacher, generate_motion
 from data.nao import JOINT_LIMITS, forward_kinematics
 from data.scenario import ACTIONS, COLOURS, SHAPES, Scene, all_scenes
+from data.world import FPS, TABLE_Z
 
 
 def _motion(scene: Scene, teacher_seed: int, trial_seed: int) -> Motion:

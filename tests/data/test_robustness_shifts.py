@@ -22,9 +22,10 @@ from benchmarks.robustness import (
     write_recording,
 )
 from data.camera import Appearance, head_angles, project
-from data.motion import MAX_DURATION_S, MIN_DURATION_S, OBJECT_HOME, TABLE_Z, Teacher
+from data.motion import MAX_DURATION_S, MIN_DURATION_S, Teacher
 from data.recording import Recording, read_recording
 from data.scenario import ACTIONS, COLOURS, SHAPES
+from data.world import OBJECT_HOME, TABLE_Z
 
 SEED = 1
 DRAWS = 400  # sampler draws that stand for "the corpus's range"
