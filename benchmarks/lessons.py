@@ -25,9 +25,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from fastapi.testclient import TestClient  # noqa: E402
 
-from server.app import create_app  # noqa: E402
+from server.services.corpus import Corpus  # noqa: E402
+from server.services.models import ModelRegistry  # noqa: E402
 from server.settings import Settings  # noqa: E402
-from server.state import AppState  # noqa: E402
+from tests.app_builder import build_app, lesson_world  # noqa: E402
 
 GOAL_MS = 300.0
 COSINE_GOAL_S = 10.0
@@ -36,16 +37,15 @@ COSINE_GOAL_S = 10.0
 def make_client(tmp: Path) -> tuple[TestClient, str]:
     settings = Settings.from_env(viser=False)
     try:
-        state = AppState(settings)  # the shipped corpus and models (or MTRNN_* settings), if there
-        corpus = settings.corpus_path or "data/artefacts/corpus.npz"
-        source = f"corpus {corpus}, model {state.model.name!r} from {settings.models_dir}"
-        return TestClient(create_app(settings)), source
+        corpus = Corpus.load(settings)  # the shipped corpus and models (or MTRNN_* settings), if there
+        served = ModelRegistry.serving(settings, corpus).served.name
+        corpus_file = settings.corpus_path or "data/artefacts/corpus.npz"
+        source = f"corpus {corpus_file}, model {served!r} from {settings.models_dir}"
+        return TestClient(build_app(settings)), source
     except (FileNotFoundError, ImportError) as err:
         logging.getLogger(__name__).warning("no shipped artefacts (%s): using the synthetic world", err)
-    from tests.server.lesson_world import build, make_state_factory
-
-    settings = build(tmp)
-    return TestClient(create_app(settings, make_state_factory(settings))), "synthetic world, untrained models"
+    settings, load_world = lesson_world(tmp)
+    return TestClient(build_app(settings, load_world)), "synthetic world, untrained models"
 
 
 def p50(client: TestClient, method: str, url: str, repeat: int, **kwargs: object) -> tuple[float, float, int]:

@@ -34,16 +34,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from model.experiments.protocol import (  # noqa: E402
-    apply_overrides,
-    data_digest,
-    default_config,
-    plan,
-    run_protocol,
-    runner_for,
-)
+from model.experiments.protocol import data_digest, plan, run_protocol  # noqa: E402
 from model.experiments.runstore import RunStore  # noqa: E402
-from server.commands.evaluate import load_data, parse_overrides  # noqa: E402
+from server.commands.evaluate import build_config, load_data, parse_overrides  # noqa: E402
 
 
 def measure(engine: str, mode: str, runs: int, workers: int, config: dict, data: object) -> dict:
@@ -51,7 +44,7 @@ def measure(engine: str, mode: str, runs: int, workers: int, config: dict, data:
     specs = plan("benchmark", mode, runs, 1, config, data_digest(data))
     with tempfile.TemporaryDirectory(prefix=f"bench-{engine}-") as tmp:
         started = time.perf_counter()
-        result = run_protocol(data, specs, RunStore(tmp), engine, workers, runner=runner_for(mode))
+        result = run_protocol(data, specs, RunStore(tmp), engine, workers)
         wall = time.perf_counter() - started
     if engine == "ray":
         import ray
@@ -135,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING)
 
-    config = apply_overrides(default_config(args.mode), parse_overrides(args.overrides))
+    config = build_config(parse_overrides(args.overrides), args.mode)
     data = load_data(None)
     rows = [from_store(args.from_store, args.mode, args.workers)] if args.from_store else []
     rows += [measure(e, args.mode, args.runs, args.workers, config, data) for e in args.engines]

@@ -18,7 +18,6 @@ import argparse
 import io
 import json
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -29,36 +28,18 @@ from pathlib import Path
 
 import httpx
 
-from data.corpus import export_recording
-from data.recording import Recording, write_zip
-from server.viewer import free_port
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from data.corpus import export_recording  # noqa: E402
+from data.recording import Recording, write_zip  # noqa: E402
+from tests.app_builder import serve_in_process  # noqa: E402
 
 
 @contextmanager
 def local_app() -> Iterator[str]:
     """`mtrnn serve --no-viewer` in its own process, as `make run` starts it."""
-    port = free_port()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "server.cli", "serve", "--no-viewer", "--port", str(port)],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
-    url = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.time() + 120
-        while True:
-            try:
-                if httpx.get(f"{url}/api/health", timeout=2).status_code == 200:
-                    break
-            except httpx.HTTPError:
-                pass
-            if time.time() > deadline or proc.poll() is not None:
-                raise RuntimeError("the explorer did not start (see `mtrnn serve`)")
-            time.sleep(0.2)
+    with serve_in_process(["server.cli", "serve", "--no-viewer"], timeout=120, quiet=True) as (url, _):
         yield url
-    finally:
-        proc.terminate()
-        proc.wait(timeout=10)
 
 
 def percentile(values: list[float], q: float) -> float:
@@ -74,6 +55,100 @@ def upload_of_100_frames(rid: str) -> bytes:
         return write_zip(short, Path(tmp) / "rec.zip").read_bytes()
 
 
+def concurrent_load(
+    url: str, scenes: list[str], clients: int, duration: float
+) -> tuple[dict[str, int], float]:
+    """`clients` threads asking for describe, scene list and scene detail for `duration` seconds:
+    ({"ok": n, "errors": n}, seconds)."""
+    counts = {"ok": 0, "errors": 0}
+    lock = threading.Lock()
+    stop = time.perf_counter() + duration
+
+    def worker(index: int) -> None:
+        with httpx.Client(base_url=url, timeout=60) as c:
+            k = index
+            while time.perf_counter() < stop:
+                rid = scenes[k % len(scenes)]
+                kind = k % 4
+                try:
+                    if kind < 2:
+                        r = c.post(f"/api/scenes/{rid}/describe")
+                    elif kind == 2:
+                        r = c.get("/api/scenes", params={"action": "pull"})
+                    else:
+                        r = c.get(f"/api/scenes/{rid}")
+                    ok = r.status_code == 200
+                except httpx.HTTPError:
+                    ok = False
+                with lock:
+                    counts["ok" if ok else "errors"] += 1
+                k += clients
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(clients)]
+    started = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    elapsed = time.perf_counter() - started
+    return counts, elapsed
+
+
+def time_describes(client: httpx.Client, scenes: list[str], count: int) -> dict:
+    """Latency of POST /api/scenes/{id}/describe over `count` corpus scenes (after a warm-up)."""
+    for rid in scenes[:3]:
+        client.post(f"/api/scenes/{rid}/describe").raise_for_status()
+    describe_ms = []
+    for k in range(count):
+        t0 = time.perf_counter()
+        client.post(f"/api/scenes/{scenes[k % len(scenes)]}/describe").raise_for_status()
+        describe_ms.append((time.perf_counter() - t0) * 1e3)
+    return {
+        "p50": statistics.median(describe_ms),
+        "p90": percentile(describe_ms, 0.9),
+        "n": len(describe_ms),
+        "goal_p50": 20.0,
+    }
+
+
+def time_uploads(client: httpx.Client, rid: str, count: int) -> dict:
+    """Latency of POST /api/describe of a 100-frame recording, with the server's own timings."""
+    data = upload_of_100_frames(rid)
+    upload_s, server_ms = [], {"read_ms": [], "encode_ms": [], "model_ms": []}
+    for _ in range(count):
+        t0 = time.perf_counter()
+        r = client.post("/api/describe", files={"recording": ("rec.zip", io.BytesIO(data))})
+        r.raise_for_status()
+        upload_s.append(time.perf_counter() - t0)
+        for key in server_ms:
+            server_ms[key].append(r.json()["timings"][key])
+    return {
+        "p50": statistics.median(upload_s),
+        "max": max(upload_s),
+        "n": len(upload_s),
+        "bytes": len(data),
+        "goal_p50": 1.0,
+        **{f"server_{k}_p50": statistics.median(v) for k, v in server_ms.items()},
+    }
+
+
+def print_summary(result: dict) -> None:
+    d, u, c = result["describe_scene_ms"], result["upload_100_frames_s"], result["concurrent"]
+    print(
+        f"describe corpus scene: p50 {d['p50']:.1f} ms, p90 {d['p90']:.1f} ms (n={d['n']}; goal p50 <= 20 ms)"
+    )
+    print(
+        f"upload 100 frames 320x240 ({u['bytes'] / 2**20:.1f} MiB zip): "
+        f"p50 {u['p50']:.2f} s, max {u['max']:.2f} s "
+        f"(read {u['server_read_ms_p50']:.0f} ms, encode {u['server_encode_ms_p50']:.0f} ms, "
+        f"model {u['server_model_ms_p50']:.0f} ms; goal p50 <= 1.0 s)"
+    )
+    print(
+        f"{c['clients']} clients x {c['seconds']} s: {c['requests']} requests, {c['rps']:.1f} req/s, "
+        f"{c['errors']} errors (goal 0)"
+    )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--url", default=None, help="a running explorer (default: start one here)")
@@ -87,98 +162,22 @@ def main() -> int:
     with local_app() if args.url is None else contextmanager(lambda: iter([args.url]))() as url:
         client = httpx.Client(base_url=url, timeout=60)
         scenes = [s["id"] for s in client.get("/api/scenes").json()["scenes"]]
-        for rid in scenes[:3]:  # warm-up
-            client.post(f"/api/scenes/{rid}/describe").raise_for_status()
-
-        describe_ms = []
-        for k in range(args.describes):
-            t0 = time.perf_counter()
-            client.post(f"/api/scenes/{scenes[k % len(scenes)]}/describe").raise_for_status()
-            describe_ms.append((time.perf_counter() - t0) * 1e3)
-
-        data = upload_of_100_frames(scenes[0])
-        upload_s, server_ms = [], {"read_ms": [], "encode_ms": [], "model_ms": []}
-        for _ in range(args.uploads):
-            t0 = time.perf_counter()
-            r = client.post("/api/describe", files={"recording": ("rec.zip", io.BytesIO(data))})
-            r.raise_for_status()
-            upload_s.append(time.perf_counter() - t0)
-            for key in server_ms:
-                server_ms[key].append(r.json()["timings"][key])
-
-        counts = {"ok": 0, "errors": 0}
-        lock = threading.Lock()
-        stop = time.perf_counter() + args.duration
-
-        def worker(index: int) -> None:
-            with httpx.Client(base_url=url, timeout=60) as c:
-                k = index
-                while time.perf_counter() < stop:
-                    rid = scenes[k % len(scenes)]
-                    kind = k % 4
-                    try:
-                        if kind < 2:
-                            r = c.post(f"/api/scenes/{rid}/describe")
-                        elif kind == 2:
-                            r = c.get("/api/scenes", params={"action": "pull"})
-                        else:
-                            r = c.get(f"/api/scenes/{rid}")
-                        ok = r.status_code == 200
-                    except httpx.HTTPError:
-                        ok = False
-                    with lock:
-                        counts["ok" if ok else "errors"] += 1
-                    k += args.clients
-
-        threads = [threading.Thread(target=worker, args=(i,)) for i in range(args.clients)]
-        started = time.perf_counter()
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
-        elapsed = time.perf_counter() - started
-
-    result = {
-        "describe_scene_ms": {
-            "p50": statistics.median(describe_ms),
-            "p90": percentile(describe_ms, 0.9),
-            "n": len(describe_ms),
-            "goal_p50": 20.0,
-        },
-        "upload_100_frames_s": {
-            "p50": statistics.median(upload_s),
-            "max": max(upload_s),
-            "n": len(upload_s),
-            "bytes": len(data),
-            "goal_p50": 1.0,
-            **{f"server_{k}_p50": statistics.median(v) for k, v in server_ms.items()},
-        },
-        "concurrent": {
-            "clients": args.clients,
-            "seconds": round(elapsed, 1),
-            "requests": counts["ok"] + counts["errors"],
-            "errors": counts["errors"],
-            "rps": (counts["ok"] + counts["errors"]) / elapsed,
-        },
+        result = {
+            "describe_scene_ms": time_describes(client, scenes, args.describes),
+            "upload_100_frames_s": time_uploads(client, scenes[0], args.uploads),
+        }
+        counts, elapsed = concurrent_load(url, scenes, args.clients, args.duration)
+    result["concurrent"] = {
+        "clients": args.clients,
+        "seconds": round(elapsed, 1),
+        "requests": counts["ok"] + counts["errors"],
+        "errors": counts["errors"],
+        "rps": (counts["ok"] + counts["errors"]) / elapsed,
     }
     if args.json:
         print(json.dumps(result, indent=1))
     else:
-        d, u, c = result["describe_scene_ms"], result["upload_100_frames_s"], result["concurrent"]
-        print(
-            f"describe corpus scene: p50 {d['p50']:.1f} ms, p90 {d['p90']:.1f} ms "
-            f"(n={d['n']}; goal p50 <= 20 ms)"
-        )
-        print(
-            f"upload 100 frames 320x240 ({u['bytes'] / 2**20:.1f} MiB zip): "
-            f"p50 {u['p50']:.2f} s, max {u['max']:.2f} s "
-            f"(read {u['server_read_ms_p50']:.0f} ms, encode {u['server_encode_ms_p50']:.0f} ms, "
-            f"model {u['server_model_ms_p50']:.0f} ms; goal p50 <= 1.0 s)"
-        )
-        print(
-            f"{c['clients']} clients x {c['seconds']} s: {c['requests']} requests, {c['rps']:.1f} req/s, "
-            f"{c['errors']} errors (goal 0)"
-        )
+        print_summary(result)
     return 0
 
 

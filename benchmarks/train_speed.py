@@ -4,8 +4,8 @@
    `model.mtrnn` (one masked dense matrix, the encoders' input projection for all steps at once)
    against a straightforward per-block reference written here (one nn.Linear per connected block
    pair, evaluated per step), with the ratio.
-2. Wall time of one whole training per mode on fold 0 of the corpus (faithful, and end_to_end when
-   `model/end_to_end.py` is installed), unless --skip-training.
+2. Wall time of one whole training per mode (`model.training.MODES`) on fold 0 of the corpus
+   (faithful and end_to_end by default), unless --skip-training.
 
 Run:  .venv/bin/python benchmarks/train_speed.py [--epochs 10] [--skip-training] [--json]
 The machine is shared: note the load average printed at the start when reading the numbers.
@@ -25,7 +25,7 @@ from torch import Tensor, nn
 
 from model.config import MTRNNConfig, MultiMTRNNConfig, TrainingConfig
 from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
-from model.training import make_optimiser
+from model.training.common import make_optimiser
 
 LAYERS = ("io", "cf", "cs")
 CONNECTED = [(d, s) for d in range(3) for s in range(3) if abs(d - s) <= 1]  # adjacent + recurrence
@@ -168,9 +168,9 @@ def main() -> int:
     report: dict = {"load_average_before": os.getloadavg(), "threads": 1}
     report["epoch_ms"] = bench_nets(args.epochs)
     if not args.skip_training:
-        from model.training import available_modes
+        from model.training import MODES
 
-        modes = [m for m in args.modes if m in available_modes()]
+        modes = [m for m in args.modes if m in MODES]
         report["training"] = bench_training(modes, args.corpus)
     report["load_average_after"] = os.getloadavg()
     if args.json:

@@ -3,7 +3,7 @@
 Each recording (scene, variant) is made from three random streams derived from
 ``(seed, scene.index, variant)``: the teacher (`Teacher.sample`), the motion (`generate_motion`)
 and the camera's appearance (`Appearance.sample`). Its frames are rendered (`render_frames`) and
-encoded like any uploaded recording (`encode_frames`, `encode_joints`); the frames themselves are
+encoded like any uploaded recording (`data.encode.encode_recording`); the frames themselves are
 not stored, since `export_recording` re-renders them from the same streams.
 
 File layout (``data/artefacts/corpus.npz``, no pickles; ragged sequences concatenated):

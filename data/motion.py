@@ -198,10 +198,28 @@ def _keyframes(
         )
         pre = [0.5 * (home + c0) + np.array([0.0, 0.0, 0.01])]
 
-    tempo = teacher.tempo * (1.0 + jitter(0.08))
+    frames, contact_index = _timeline(scene, teacher, rng, home, pre, c0, direction, amp, yaw)
+    return frames, contact_index, direction
+
+
+def _timeline(
+    scene: Scene,
+    teacher: Teacher,
+    rng: np.random.Generator,
+    home: np.ndarray,
+    pre: list[np.ndarray],
+    c0: np.ndarray,
+    direction: np.ndarray,
+    amp: float,
+    yaw: float,
+) -> tuple[list[tuple[np.ndarray, float, float]], int]:
+    """The keyframes from home over `pre` to the contact point `c0`, the action (the object moved `amp`
+    along `direction` in the table plane, or the pointing dip) and back, timed by the teacher's tempo; and the
+    index of the keyframe that ends the contact segment (-1: none)."""
+    tempo = teacher.tempo * (1.0 + float(rng.normal(0.0, 0.08)))
     reach_s, descend_s, act_s, hold_s, back_s = np.array([1.1, 0.45, 1.2, 0.25, 0.8]) / tempo
     act_s *= 0.6 + amp / 0.045 * 0.4
-    pause_s = teacher.hesitation * (1.0 + jitter(0.2)) if teacher.hesitation > 0 else 0.0
+    pause_s = teacher.hesitation * (1.0 + float(rng.normal(0.0, 0.2))) if teacher.hesitation > 0 else 0.0
     idle_s = float(rng.uniform(0.1, 0.4))
     end = c0.copy()
     end[:2] += direction * amp
@@ -220,7 +238,7 @@ def _keyframes(
         frames.append((end, act_s, yaw))
     frames.append((frames[-1][0], hold_s, yaw))
     frames.append((back, back_s, teacher.wrist_yaw))
-    return frames, contact_index, direction
+    return frames, contact_index
 
 
 def generate_motion(scene: Scene, teacher: Teacher, rng: np.random.Generator) -> Motion:

@@ -1,7 +1,9 @@
-"""Checkpoints: `model.safetensors` (weights) + `meta.json` (config, mode, assemblies, seed, split,
-metrics, lexicon, T_a) + optional `training_csc.safetensors` (the learned c_0 / c_T tables, for
-the Csc explorer). Loading never unpickles. Writing is atomic: everything goes into a temporary
-sibling directory that then replaces `directory` in one rename.
+"""Checkpoints of every training mode: `model.safetensors` (weights) + `meta.json` (mode, config,
+assemblies, seed, split, metrics, lexicon, T_a) + optional `training_csc.safetensors` (the learned
+c_0 / c_T tables, for the Csc explorer). Loading never unpickles and rebuilds the model its
+meta["mode"] names: the peer baseline (`model.training.peer`) or, for every other mode, a
+MultiMTRNN. Writing is atomic: everything goes into a temporary sibling directory that then
+replaces `directory` in one rename.
 """
 
 from __future__ import annotations
@@ -16,8 +18,11 @@ import numpy as np
 import torch
 from safetensors.torch import load_file, save_file
 
+from model.assemblies import ASSEMBLIES
 from model.config import MultiMTRNNConfig
-from model.multimtrnn import ASSEMBLIES, MultiMTRNN
+from model.multimtrnn import MultiMTRNN
+from model.training.common import Describer
+from model.training.peer import LEGACY, PeerConfig, PeerModel
 
 WEIGHTS = "model.safetensors"
 META = "meta.json"
@@ -38,8 +43,19 @@ def _jsonable(value):
     return value
 
 
+def _architecture(model: Describer) -> dict:
+    """What `load` needs to rebuild `model` before its weights go in."""
+    if isinstance(model, PeerModel):
+        return {"peer_config": model.config.to_dict(), "generation_steps": model.generation_steps}
+    return {
+        "config": model.config.to_dict(),
+        "assemblies": model.assemblies_spec(),
+        "generation_steps": model.config.generation_steps,
+    }
+
+
 def save(
-    model: MultiMTRNN,
+    model: Describer,
     directory: str | Path,
     meta: dict | None = None,
     training_csc: dict[str, np.ndarray] | None = None,
@@ -48,14 +64,7 @@ def save(
     directory = Path(directory)
     directory.parent.mkdir(parents=True, exist_ok=True)
     full_meta = dict(_jsonable(meta or {}))
-    full_meta.update(
-        {
-            "format": FORMAT_VERSION,
-            "config": model.config.to_dict(),
-            "assemblies": model.assemblies_spec(),
-            "generation_steps": model.config.generation_steps,
-        }
-    )
+    full_meta.update({"format": FORMAT_VERSION, **_architecture(model)})
     tmp = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
     try:
         state = {k: v.detach().contiguous().clone() for k, v in model.state_dict().items()}
@@ -79,22 +88,34 @@ def save(
     return directory
 
 
-def load(directory: str | Path) -> tuple[MultiMTRNN, dict]:
+def _multimtrnn(meta: dict, weights: dict[str, torch.Tensor]) -> MultiMTRNN:
+    spec = meta["assemblies"]
+    if spec["kind"] not in ASSEMBLIES:
+        raise ValueError(f"checkpoint needs assemblies kind {spec['kind']!r}; known: {sorted(ASSEMBLIES)}")
+    model = MultiMTRNN(
+        MultiMTRNNConfig.from_dict(meta["config"]), assemblies=ASSEMBLIES[spec["kind"]](**spec["kwargs"])
+    )
+    model.load_state_dict(weights)
+    return model
+
+
+def _peer(meta: dict, weights: dict[str, torch.Tensor]) -> PeerModel:
+    model = PeerModel(PeerConfig.from_dict({**LEGACY, **meta["peer_config"]}), int(meta["generation_steps"]))
+    state = model.state_dict()  # a legacy checkpoint has no normalisation buffers: they stay identity
+    state.update(weights)
+    model.load_state_dict(state)
+    return model
+
+
+# the model a mode trains, rebuilt from meta and weights; a MultiMTRNN for every other mode
+BUILDERS = {"peer": _peer}
+
+
+def load(directory: str | Path) -> tuple[Describer, dict]:
     """Rebuild the model from `meta.json` and load its weights (no pickle anywhere)."""
     directory = Path(directory)
     meta = json.loads((directory / META).read_text())
-    config = MultiMTRNNConfig.from_dict(meta["config"])
-    spec = meta["assemblies"]
-    if spec["kind"] not in ASSEMBLIES:
-        # Modes that define their own assemblies register them on import.
-        from model.training import available_modes
-
-        available_modes()
-    if spec["kind"] not in ASSEMBLIES:
-        raise ValueError(f"checkpoint needs assemblies kind {spec['kind']!r}; known: {sorted(ASSEMBLIES)}")
-    assemblies = ASSEMBLIES[spec["kind"]](**spec["kwargs"])
-    model = MultiMTRNN(config, assemblies=assemblies)
-    model.load_state_dict(load_file(str(directory / WEIGHTS)))
+    model = BUILDERS.get(meta.get("mode"), _multimtrnn)(meta, load_file(str(directory / WEIGHTS)))
     model.eval()
     return model, meta
 

@@ -101,10 +101,10 @@ class MultiMTRNNConfig:
     visual: MTRNNConfig = field(default_factory=visual_config)
     training: TrainingConfig = field(default_factory=TrainingConfig)
     # T_a of closed-loop generation: the longest training utterance's encoding + a margin. Set by
-    # training (`model.training.generation_steps`); stored here so a checkpoint carries it.
+    # training (`model.training.common.generation_steps`); stored here so a checkpoint carries it.
     generation_steps: int = 60
     # Named options of the training mode (fields of model.training.end_to_end.EndToEndOptions or
-    # model.training.FaithfulOptions); empty means the mode's defaults (the paper's, for faithful).
+    # model.training.faithful.FaithfulOptions); empty means the mode's defaults (the paper's, for faithful).
     options: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:

@@ -1,10 +1,17 @@
-"""What training needs to know about a set of recordings, and nothing about where they came from."""
+"""What training needs to know about a set of recordings, and nothing about where they came from:
+the encoded sequences (`SequenceSet`) and the scene a recording id belongs to (`scene_key`)."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
+
+
+def scene_key(recording_id: str) -> str:
+    """ "slide-red-apple-2" -> "slide-red-apple" (the variant suffix "-N" removed, if any)."""
+    return re.sub(r"-\d+$", "", recording_id)
 
 
 @dataclass

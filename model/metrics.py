@@ -2,10 +2,9 @@
 
 Utterances (4.3) are scored on the phoneme level, as the paper does, and on the word level:
 
-- `edit_distance`: weighted Levenshtein distance with insertion 1, deletion 1, substitution 2,
-  normalised by the target length. A substitution costs exactly a deletion plus an insertion, so
-  the minimum distance is ``|produced| + |target| - 2 * LCS`` and the matched pairs of the
-  minimum-edit alignment are a longest common subsequence.
+- `edit_distance`: weighted Levenshtein distance with insertion 1, deletion 1, substitution 2
+  (`model.encoding.words.align`, shared with the lexicon's nearest word), normalised by the
+  target length; the matched pairs of the minimum-edit alignment are a longest common subsequence.
 - `phoneme_f1`: precision = matched / |produced|, recall = matched / |target| over that alignment.
 - `sentence_exact`, `word_accuracy`, `slot_accuracy` (action, colour, object of "ACT the COL OBJ.").
 - `mixed(train, test)`: the paper's "mixed" measure, train and test weighted equally.
@@ -17,104 +16,28 @@ Csc measures (eqs. 13-15, 22-23) on abstracted context vectors (one row per sequ
   with respect to common usage: **d_inter is the mean distance within a cluster** (averaged over
   clusters) and **d_intra is the mean distance between cluster centroids**.
 - `CscPCA`: exact-SVD PCA of Csc patterns with a deterministic sign convention.
+
+Over runs: `mean_sem`, the mean and standard error of a measure (finite values only).
 """
 
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
-from typing import Literal
 
 import numpy as np
 from sklearn.decomposition import PCA
 
-INSERTION_COST = 1.0
-DELETION_COST = 1.0
-SUBSTITUTION_COST = 2.0
-
-EditOp = Literal["match", "sub", "ins", "del"]
+from model.encoding.words import align, raw_edit_distance, words_of
 
 
-@dataclass(frozen=True)
-class Alignment:
-    """A minimum-edit alignment of `produced` against `target`.
-
-    `pairs` lists ``(op, produced_index, target_index)`` in order; an index is None where the op
-    has no symbol on that side ("ins": an extra produced symbol, "del": a missing target symbol).
-    """
-
-    distance: float
-    pairs: tuple[tuple[EditOp, int | None, int | None], ...]
-
-    @property
-    def matches(self) -> int:
-        return sum(1 for op, _, _ in self.pairs if op == "match")
-
-
-def align(
-    produced: Sequence[str],
-    target: Sequence[str],
-    ins: float = INSERTION_COST,
-    dele: float = DELETION_COST,
-    sub: float = SUBSTITUTION_COST,
-) -> Alignment:
-    """Weighted Levenshtein alignment (dynamic programming, deterministic tie-breaking).
-
-    Costs: `ins` for a produced symbol absent from the target, `dele` for a target symbol the
-    production missed, `sub` for a wrong symbol in place of a target one. On ties the backtrace
-    prefers match/substitution, then deletion, then insertion.
-    """
-    n, m = len(produced), len(target)
-    cost = np.zeros((n + 1, m + 1))
-    cost[:, 0] = np.arange(n + 1) * ins
-    cost[0, :] = np.arange(m + 1) * dele
-    for i in range(1, n + 1):
-        for j in range(1, m + 1):
-            diag = cost[i - 1, j - 1] + (0.0 if produced[i - 1] == target[j - 1] else sub)
-            cost[i, j] = min(diag, cost[i, j - 1] + dele, cost[i - 1, j] + ins)
-    pairs: list[tuple[EditOp, int | None, int | None]] = []
-    i, j = n, m
-    while i > 0 or j > 0:
-        if i > 0 and j > 0:
-            same = produced[i - 1] == target[j - 1]
-            if math.isclose(cost[i, j], cost[i - 1, j - 1] + (0.0 if same else sub)):
-                pairs.append(("match" if same else "sub", i - 1, j - 1))
-                i, j = i - 1, j - 1
-                continue
-        if j > 0 and math.isclose(cost[i, j], cost[i, j - 1] + dele):
-            pairs.append(("del", None, j - 1))
-            j -= 1
-        else:
-            pairs.append(("ins", i - 1, None))
-            i -= 1
-    return Alignment(distance=float(cost[n, m]), pairs=tuple(reversed(pairs)))
-
-
-def raw_edit_distance(
-    produced: Sequence[str],
-    target: Sequence[str],
-    ins: float = INSERTION_COST,
-    dele: float = DELETION_COST,
-    sub: float = SUBSTITUTION_COST,
-) -> float:
-    """The unnormalised weighted edit distance."""
-    return align(produced, target, ins, dele, sub).distance
-
-
-def edit_distance(
-    produced: Sequence[str],
-    target: Sequence[str],
-    ins: float = INSERTION_COST,
-    dele: float = DELETION_COST,
-    sub: float = SUBSTITUTION_COST,
-) -> float:
-    """Weighted edit distance normalised by the target length (paper 4.3).
+def edit_distance(produced: Sequence[str], target: Sequence[str], **costs: float) -> float:
+    """Weighted edit distance normalised by the target length (paper 4.3; `costs` as `align`'s).
 
     An empty target divides by 1 (the distance is then the number of produced symbols times `ins`).
     """
-    return raw_edit_distance(produced, target, ins, dele, sub) / max(len(target), 1)
+    return raw_edit_distance(produced, target, **costs) / max(len(target), 1)
 
 
 def phoneme_f1(produced: Sequence[str], target: Sequence[str]) -> tuple[float, float, float]:
@@ -130,14 +53,6 @@ def phoneme_f1(produced: Sequence[str], target: Sequence[str]) -> tuple[float, f
     recall = matched / len(target) if target else 0.0
     f1 = 2 * precision * recall / (precision + recall) if precision + recall > 0 else 0.0
     return precision, recall, f1
-
-
-_WORD = re.compile(r"[a-z']+")
-
-
-def words_of(text: str) -> list[str]:
-    """Lower-case words of a sentence, punctuation dropped."""
-    return _WORD.findall(text.lower())
 
 
 def _normalise(text: str) -> str:
@@ -203,21 +118,28 @@ def parse_slots(
 
 
 def slot_accuracy(
-    produced_text: str,
-    target_text: str,
-    actions: Sequence[str] | None = None,
-    colours: Sequence[str] | None = None,
-    objects: Sequence[str] | None = None,
+    produced_text: str, target_text: str, *vocabularies: Sequence[str] | None
 ) -> dict[str, float]:
     """1.0 or 0.0 per slot (action, colour, object); an unreadable produced slot scores 0.
+    `vocabularies` (actions, colours, objects) as `parse_slots` takes them.
 
     Raises ValueError if the target itself is not a sentence "ACT the COL OBJ.".
     """
-    target = parse_slots(target_text, actions, colours, objects)
+    target = parse_slots(target_text, *vocabularies)
     if any(v is None for v in target.values()):
         raise ValueError(f"target {target_text!r} is not a sentence 'ACT the COL OBJ.'")
-    produced = parse_slots(produced_text, actions, colours, objects)
+    produced = parse_slots(produced_text, *vocabularies)
     return {s: float(produced[s] == target[s]) for s in SLOTS}
+
+
+def mean_sem(values: Iterable[float | None]) -> tuple[float, float, int]:
+    """Mean, standard error (std with ddof 1 over sqrt(n); 0 for one value) and n of the finite
+    values; (nan, nan, 0) when there are none."""
+    a = np.asarray([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
+    if a.size == 0:
+        return math.nan, math.nan, 0
+    sem = float(a.std(ddof=1) / math.sqrt(a.size)) if a.size > 1 else 0.0
+    return float(a.mean()), sem, int(a.size)
 
 
 def mixed(train: float, test: float) -> float:
@@ -248,16 +170,11 @@ class SequenceScores:
     slot_object: float
 
 
-def score(
-    produced: Transcript,
-    target: Transcript,
-    actions: Sequence[str] | None = None,
-    colours: Sequence[str] | None = None,
-    objects: Sequence[str] | None = None,
-) -> SequenceScores:
-    """Score one production (phoneme measures on phonemes, word measures on text)."""
+def score(produced: Transcript, target: Transcript, *vocabularies: Sequence[str] | None) -> SequenceScores:
+    """Score one production (phoneme measures on phonemes, word measures on text; `vocabularies`
+    as `parse_slots` takes them)."""
     precision, recall, f1 = phoneme_f1(produced.phonemes, target.phonemes)
-    slots = slot_accuracy(produced.text, target.text, actions, colours, objects)
+    slots = slot_accuracy(produced.text, target.text, *vocabularies)
     return SequenceScores(
         edit_distance=edit_distance(produced.phonemes, target.phonemes),
         precision=precision,
@@ -272,13 +189,10 @@ def score(
 
 
 def summarise(
-    pairs: Iterable[tuple[Transcript, Transcript]],
-    actions: Sequence[str] | None = None,
-    colours: Sequence[str] | None = None,
-    objects: Sequence[str] | None = None,
+    pairs: Iterable[tuple[Transcript, Transcript]], *vocabularies: Sequence[str] | None
 ) -> dict[str, float]:
     """Means of every `SequenceScores` field over (produced, target) pairs of one split, plus `n`."""
-    scores = [asdict(score(p, t, actions, colours, objects)) for p, t in pairs]
+    scores = [asdict(score(p, t, *vocabularies)) for p, t in pairs]
     if not scores:
         raise ValueError("summarise needs at least one (produced, target) pair")
     summary = {k: float(np.mean([s[k] for s in scores])) for k in scores[0]}

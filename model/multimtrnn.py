@@ -6,73 +6,23 @@ Csc state c_a,0 of MTRNN_a, which generates the utterance closed-loop (context b
 
     perception -> (c_s,T, c_v,T) -> assemblies -> c_a,0 -> MTRNN_a -> activity -> phonemes -> text
 
-The assemblies are any `nn.Module` with `forward(c_s, c_v) -> c_a0` registered by a kind name
-(`register_assemblies`), so a checkpoint can rebuild them; `CellAssemblies` is the paper's.
+The assemblies are any module of `model.assemblies` (`forward(c_s, c_v) -> c_a0`, rebuilt from its
+kind name by a checkpoint); `CellAssemblies` is the paper's and the default.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 from torch import Tensor, nn
 
+from model.assemblies import CellAssemblies
 from model.config import MultiMTRNNConfig
 from model.encoding.utterance import Lexicon, decode_text
-from model.mtrnn import MTRNN, scaled_logistic
-
-ASSEMBLIES: dict[str, type[nn.Module]] = {}
-
-
-def register_assemblies(kind: str) -> Callable[[type[nn.Module]], type[nn.Module]]:
-    """Class decorator: make an assemblies module rebuildable from its `kind` name.
-
-    The class must take keyword arguments that are JSON values, expose them as `init_kwargs()`
-    and set `kind`; `forward(c_s [B, csc_s], c_v [B, csc_v]) -> c_a0 [B, csc_a]`.
-    """
-
-    def decorate(cls: type[nn.Module]) -> type[nn.Module]:
-        if kind in ASSEMBLIES and ASSEMBLIES[kind] is not cls:
-            raise ValueError(f"assemblies kind {kind!r} is already registered to {ASSEMBLIES[kind]}")
-        cls.kind = kind
-        ASSEMBLIES[kind] = cls
-        return cls
-
-    return decorate
-
-
-@register_assemblies("linear")
-class CellAssemblies(nn.Module):
-    """The paper's CAs (eqs. 16-17): one linear layer from f(c_s,T), f(c_v,T) to z.
-
-    eq. (17): z_i = sum_j w_ij f(c_s,T,j) + sum_k w_ik f(c_v,T,k) + b_i for i in I_a,Csc.
-    eq. (16): trained by LMS between y = f(z) and f(c_a,0) (see `model.training.fit_assemblies`).
-    The CAs' internal state z is the c_a,0 that starts MTRNN_a's generation.
-    """
-
-    kind = "linear"
-
-    def __init__(self, csc_s: int, csc_v: int, csc_a: int, weight_init: float = 0.025, seed: int = 0) -> None:
-        super().__init__()
-        self._kwargs = {
-            "csc_s": csc_s,
-            "csc_v": csc_v,
-            "csc_a": csc_a,
-            "weight_init": weight_init,
-            "seed": seed,
-        }
-        g = torch.Generator().manual_seed(seed)
-        self.weight = nn.Parameter((torch.rand(csc_a, csc_s + csc_v, generator=g) * 2 - 1) * weight_init)
-        self.bias = nn.Parameter((torch.rand(csc_a, generator=g) * 2 - 1) * weight_init)
-
-    def init_kwargs(self) -> dict:
-        return dict(self._kwargs)
-
-    def forward(self, c_s: Tensor, c_v: Tensor) -> Tensor:
-        x = torch.cat([scaled_logistic(c_s), scaled_logistic(c_v)], dim=-1)
-        return x @ self.weight.T + self.bias  # eq. (17)
+from model.mtrnn import MTRNN
 
 
 @dataclass
@@ -86,6 +36,19 @@ class Description:
     csc_s: np.ndarray | None  # [csc_s] c_s,T (None when generated from a given c_a,0)
     csc_v: np.ndarray | None  # [csc_v] c_v,T
     csc_a: np.ndarray  # [csc_a] c_a,0
+
+
+CSC_SPACES = ("somatosensory", "visual", "auditory")  # c_s,T, c_v,T, c_a,0 (Fig. 10)
+
+
+def csc_vectors(descriptions: Sequence[Description]) -> dict[str, np.ndarray]:
+    """Per space, the Csc vectors of the described scenes stacked [scenes, csc]: c_s,T, c_v,T and
+    the c_a,0 the assemblies produced."""
+    return {
+        "somatosensory": np.stack([d.csc_s for d in descriptions]),
+        "visual": np.stack([d.csc_v for d in descriptions]),
+        "auditory": np.stack([d.csc_a for d in descriptions]),
+    }
 
 
 @dataclass
@@ -201,17 +164,6 @@ class MultiMTRNN(nn.Module):
                 lengths = torch.full((x.shape[0],), x.shape[1])
             return x[..., :columns], lengths
         return pad_sequences(x, columns)
-
-    def forward(
-        self,
-        proprioception: Sequence[np.ndarray] | Tensor,
-        vision: Sequence[np.ndarray] | Tensor,
-        proprioception_lengths: Tensor | None = None,
-        vision_lengths: Tensor | None = None,
-    ) -> Tensor:
-        """Perception -> c_a,0 [B, csc_a]."""
-        c_s, c_v = self.abstract(proprioception, vision, proprioception_lengths, vision_lengths)
-        return self.assemblies(c_s, c_v)
 
     # --- Csc -> utterance -----------------------------------------------------------------------
 

@@ -1,10 +1,10 @@
 """The explorer app: FastAPI (REST + the web pages) and the viser 3D view, in one process.
 
-`create_app(settings)` builds the app; its lifespan loads the corpus and the served model into an
-`AppState` (injected into the routes with `Depends(get_state)`) and starts the 3D viewer. Every
-module in `server/routes/` that defines `router` is included, and every page module in
-`web/pages/` is listed by `GET /api/pages` for the navigation: adding a resource or a page is
-adding a file.
+`create_app(settings)` builds the app; its lifespan creates the services (`server.deps`: corpus,
+model registry, Csc survey, describing, jobs) and starts the 3D viewer. Every module in
+`server/routes/` that defines `router` is included, and every page module in `web/pages/` is
+listed by `GET /api/pages` for the navigation: adding a resource or a page is adding a file.
+A service's error (`server.services.errors`) becomes ``{"detail": message}`` with its status.
 """
 
 from __future__ import annotations
@@ -13,68 +13,105 @@ import importlib
 import logging
 import pkgutil
 import threading
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, Sequence
 from contextlib import asynccontextmanager
 from pathlib import Path
 
 import plotly
-from fastapi import FastAPI
-from fastapi.responses import FileResponse
+from fastapi import FastAPI, Request
+from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
 
+from data.nao import forward_kinematics
+from data.recording import RecordingError
 from server import routes
-from server.routes.jobs import attach_jobs
-from server.schemas import PageList
+from server.deps import Services, build_services
+from server.jobs.kinds import warm_up_cosine
+from server.jobs.manager import JobManager
+from server.schemas.common import PageList
+from server.services.corpus import Corpus
+from server.services.errors import ServiceError
 from server.settings import Settings
-from server.state import AppState
 
 logger = logging.getLogger(__name__)
 
 PLOTLY_JS = Path(plotly.__file__).resolve().parent / "package_data" / "plotly.min.js"
+CorpusLoader = Callable[[Settings], Corpus]
 
 
-def _include_routers(app: FastAPI) -> None:
+def _include_routers(app: FastAPI, names: Sequence[str] | None) -> None:
     for info in sorted(pkgutil.iter_modules(routes.__path__), key=lambda m: m.name):
+        if names is not None and info.name not in names:
+            continue
         module = importlib.import_module(f"server.routes.{info.name}")
         router = getattr(module, "router", None)
         if router is not None:
             app.include_router(router)
 
 
-def create_app(
-    settings: Settings | None = None, make_state: Callable[[Settings], AppState] | None = None
-) -> FastAPI:
-    """The ASGI app. `make_state` builds the AppState (default: the shipped corpus and models)."""
-    settings = settings or Settings.from_env()
-    make_state = make_state or AppState
+def _start(settings: Settings, load_corpus: CorpusLoader) -> Services:
+    services = build_services(settings, load_corpus(settings))
+    if settings.viser:
+        from server.viewer import SceneViewer
 
+        services.viewer = SceneViewer(forward_kinematics)
+    logger.info("corpus: %d recordings; model %r", len(services.corpus.entries), services.models.served.name)
+    return services
+
+
+def _lifespan(settings: Settings, load_corpus: CorpusLoader, full: bool) -> Callable:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        state = await run_in_threadpool(make_state, settings)
-        if settings.viser:
-            from server.viewer import SceneViewer
-
-            state.viewer = SceneViewer(state.backend.forward_kinematics)
-        app.state.mtrnn = state
-        jobs = attach_jobs(app, settings)  # marks jobs a previous server left unfinished as interrupted
-        # The Csc spaces need every corpus recording described once: do it before anyone asks.
-        threading.Thread(target=state.csc_cache, name="csc-warmup", daemon=True).start()
+        services = await run_in_threadpool(_start, settings, load_corpus) if full else None
+        # marks jobs a previous server left unfinished as interrupted
+        jobs = services.jobs if services is not None else JobManager(settings)
+        app.state.services, app.state.jobs = services, jobs
+        if services is not None:
+            warm_up_cosine()
+            # The Csc spaces need every corpus recording described once: do it before anyone asks.
+            threading.Thread(target=services.survey.warm_up, name="csc-warmup", daemon=True).start()
         try:
             yield
         finally:
             jobs.shutdown()
-            if state.viewer is not None:
-                state.viewer.close()
+            if services is not None and services.viewer is not None:
+                services.viewer.close()
 
+    return lifespan
+
+
+def _answer_errors(app: FastAPI) -> None:
+    @app.exception_handler(ServiceError)
+    async def service_error(request: Request, exc: ServiceError) -> JSONResponse:
+        return JSONResponse({"detail": str(exc)}, status_code=exc.status)
+
+    @app.exception_handler(RecordingError)
+    async def recording_error(request: Request, exc: RecordingError) -> JSONResponse:
+        return JSONResponse({"detail": str(exc)}, status_code=400)
+
+
+def create_app(
+    settings: Settings | None = None,
+    load_corpus: CorpusLoader = Corpus.load,
+    routers: Sequence[str] | None = None,
+) -> FastAPI:
+    """The ASGI app over the corpus `load_corpus(settings)` gives (default: the settings' corpus file).
+
+    `routers` names the modules of `server/routes/` to include (default: all); an app of the
+    jobs and results routers alone loads no corpus and no model."""
+    settings = settings or Settings.from_env()
+    full = routers is None or any(name not in ("jobs", "results") for name in routers)
     app = FastAPI(
         title="MultiMTRNN explorer",
         description="Describe NAO recordings with the multi-modal MTRNN (Heinrich & Wermter 2018) "
         "and explore its Csc spaces.",
         version="1.0",
-        lifespan=lifespan,
+        lifespan=_lifespan(settings, load_corpus, full),
     )
-    _include_routers(app)
+    app.state.settings = settings
+    _include_routers(app, routers)
+    _answer_errors(app)
 
     @app.get("/api/pages", response_model=PageList, tags=["pages"])
     def pages() -> PageList:

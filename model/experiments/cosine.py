@@ -18,14 +18,13 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numpy as np
 import torch
 from torch import Tensor, nn
 
 from model.config import MTRNNConfig, TrainingConfig
-from model.metrics import d_avg, d_rel
+from model.metrics import d_avg, d_rel, mean_sem
 from model.mtrnn import MTRNN, context_abstraction_loss, scaled_logistic
-from model.training import make_optimiser
+from model.training.common import make_optimiser
 
 STEPS = 33
 PHASES = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
@@ -116,9 +115,8 @@ def train_cosine_once(
 
 
 def _mean_se(values: list[float]) -> dict[str, float]:
-    x = np.asarray(values, dtype=np.float64)
-    se = float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else 0.0
-    return {"mean": float(x.mean()), "se": se}
+    mean, se, _ = mean_sem(values)
+    return {"mean": mean, "se": se}
 
 
 def run_cosine(

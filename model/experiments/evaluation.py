@@ -1,36 +1,31 @@
 """One evaluation run of the paper's protocol (4.2): a 50:50 split by scene, training, scores.
 
-`run_once` is what the many-run protocol calls (locally or in Ray tasks): plain arguments in,
-JSON-serialisable metrics out, deterministic for a given (fold, seed).
+`run_once` is the one "split, train, score, build meta" for every training mode (the peer
+baseline included): the many-run protocol calls it (locally or in Ray tasks), and so do
+`mtrnn train` and the app's training jobs. Plain arguments in, JSON-serialisable metrics out,
+deterministic for a given (fold, seed).
 """
 
 from __future__ import annotations
 
 import logging
-import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from model import checkpoint
-from model.config import MultiMTRNNConfig
-from model.data import SequenceSet
+from model.data import SequenceSet, scene_key
 from model.encoding.utterance import Lexicon, text_to_phonemes
 from model.metrics import Transcript, d_avg, d_inter, d_intra, d_rel, parse_slots, summarise
-from model.multimtrnn import MultiMTRNN
-from model.training import ProgressFn, train
+from model.multimtrnn import CSC_SPACES, csc_vectors
+from model.training import TrainedModel, train
+from model.training.common import Describer, ProgressFn
 
 log = logging.getLogger(__name__)
-
-SPACES = ("somatosensory", "visual", "auditory")
-
-
-def scene_key(recording_id: str) -> str:
-    """ "slide-red-apple-2" -> "slide-red-apple" (the variant suffix "-N" removed, if any)."""
-    return re.sub(r"-\d+$", "", recording_id)
 
 
 def fold_split(scene_keys: Sequence[str], fold: int, seed: int = 0) -> tuple[list[int], list[int]]:
@@ -73,7 +68,7 @@ def csc_measures(points: np.ndarray, labels: Sequence[str]) -> dict[str, float |
 
 
 def score(
-    model: MultiMTRNN,
+    model: Describer,
     data: SequenceSet,
     lexicon: Lexicon,
     vocabularies: tuple[Sequence[str], Sequence[str], Sequence[str]] | None = None,
@@ -93,12 +88,8 @@ def score(
     vocab = vocabularies or slot_vocabularies(data.utterances)
     result: dict = summarise(pairs, *(vocab or (None, None, None)))
     actions = [parse_slots(u)["action"] or "" for u in data.utterances]
-    points = {
-        "somatosensory": np.stack([d.csc_s for d in descriptions]),
-        "visual": np.stack([d.csc_v for d in descriptions]),
-        "auditory": np.stack([d.csc_a for d in descriptions]),
-    }
-    result["csc"] = {space: csc_measures(points[space], actions) for space in SPACES}
+    points = csc_vectors(descriptions)
+    result["csc"] = {space: csc_measures(points[space], actions) for space in CSC_SPACES}
     return result
 
 
@@ -112,7 +103,7 @@ def mixed_metrics(train, test):
 
 
 def score_split(
-    model: MultiMTRNN,
+    model: Describer,
     lexicon: Lexicon,
     train_set: SequenceSet,
     test_set: SequenceSet,
@@ -130,7 +121,7 @@ def score_split(
 @dataclass
 class RunResult:
     metrics: dict  # {"train": ..., "test": ..., "mixed": ...}, JSON-serialisable
-    model: MultiMTRNN
+    model: Describer
     seconds: float
     meta: dict
 
@@ -140,33 +131,26 @@ def run_once(
     mode: str,
     fold: int,
     seed: int,
-    config: MultiMTRNNConfig | dict | None = None,
+    config: Any = None,
     out_dir: str | Path | None = None,
     progress: ProgressFn | None = None,
 ) -> RunResult:
-    """Split `data` by scene (`fold_split(ids, fold)`), train `mode` with `seed`, score both sides.
+    """Split `data` by scene (`fold_split(ids, fold)`), train `mode` with `seed` and its `config`
+    (see `model.training.train`), score both sides.
 
     As in 4.2, the split depends on the fold only and the seed is the random initialisation, so
     folds x seeds gives the paper's 10 x 10 runs. With `out_dir`, the model is saved there as a
     checkpoint whose meta carries the metrics and the split."""
-    if isinstance(config, dict):
-        config = MultiMTRNNConfig.from_dict(config)
     start = time.perf_counter()
     train_idx, test_idx = fold_split(data.ids, fold, seed=0)
     train_set, test_set = data.subset(train_idx), data.subset(test_idx)
     trained = train(train_set, mode=mode, config=config, seed=seed, progress=progress)
-    lexicon = trained.lexicon
-    metrics = score_split(trained.model, lexicon, train_set, test_set, slot_vocabularies(data.utterances))
-    seconds = time.perf_counter() - start
-    meta = dict(trained.meta)
-    meta.update(
-        {
-            "fold": fold,
-            "split": {"train": list(train_set.ids), "test": list(test_set.ids)},
-            "metrics": metrics,
-            "seconds_run": seconds,
-        }
+    metrics = score_split(
+        trained.model, trained.lexicon, train_set, test_set, slot_vocabularies(data.utterances)
     )
+    seconds = time.perf_counter() - start
+    meta = run_meta(trained, fold, train_set, test_set, metrics)
+    meta["seconds_run"] = seconds
     if out_dir is not None:
         checkpoint.save(trained.model, out_dir, meta, trained.csc)
     log.info(
@@ -179,3 +163,18 @@ def run_once(
         seconds,
     )
     return RunResult(metrics, trained.model, seconds, meta)
+
+
+def run_meta(
+    trained: TrainedModel, fold: int, train_set: SequenceSet, test_set: SequenceSet, metrics: dict
+) -> dict:
+    """The training's meta with the run's fold, split and metrics."""
+    meta = dict(trained.meta)
+    meta.update(
+        {
+            "fold": fold,
+            "split": {"train": list(train_set.ids), "test": list(test_set.ids)},
+            "metrics": metrics,
+        }
+    )
+    return meta

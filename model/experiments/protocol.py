@@ -22,7 +22,6 @@ import hashlib
 import importlib
 import logging
 import multiprocessing
-import os
 import signal
 import tempfile
 import time
@@ -36,13 +35,15 @@ from typing import Any, Literal
 import numpy as np
 
 from model.experiments.runstore import RunRecord, RunSpec, RunStore
+from model.metrics import mean_sem
 
 logger = logging.getLogger(__name__)
 
 Engine = Literal["local", "ray"]
 ProgressFn = Callable[[dict[str, Any]], None]
 
-# The function a worker calls: run_once(data, mode, fold, seed, config=None, out_dir=None) -> RunResult.
+# The function a worker calls, for every training mode:
+# run_once(data, mode, fold, seed, config=None, out_dir=None) -> RunResult.
 DEFAULT_RUNNER = "model.experiments.evaluation:run_once"
 SEED_STRIDE = 1000  # seed of (fold, init) = base_seed + SEED_STRIDE * fold + init
 
@@ -89,18 +90,9 @@ def _deep_copy(d: Mapping[str, Any]) -> dict[str, Any]:
 
 def default_config(mode: str = "faithful") -> dict[str, Any]:
     """The full default config of a mode as a dict (the peer has its own sizes)."""
-    if mode == "peer":
-        from model.training.peer import default_config as peer_default
+    from model.training import CONFIGS
 
-        return peer_default()
-    from model.config import MultiMTRNNConfig
-
-    return MultiMTRNNConfig().to_dict()
-
-
-def runner_for(mode: str) -> str:
-    """The worker function of a mode: the MultiMTRNN's `run_once`, or the peer baseline's."""
-    return "model.training.peer:run_once" if mode == "peer" else DEFAULT_RUNNER
+    return CONFIGS[mode]().to_dict()
 
 
 def plan(
@@ -367,19 +359,15 @@ def summarise(runs: Sequence[RunRecord]) -> dict[str, dict[str, dict[str, float]
     out: dict[str, dict[str, dict[str, float]]] = {}
     for split, metrics in values.items():
         for name, vs in metrics.items():
-            a = np.asarray([v for v in vs if v is not None and np.isfinite(v)], dtype=np.float64)
-            if a.size == 0:
+            finite = [v for v in vs if v is not None and np.isfinite(v)]
+            if not finite:
                 continue
+            mean, sem, n = mean_sem(finite)
             out.setdefault(split, {})[name] = {
-                "mean": float(a.mean()),
-                "sem": float(a.std(ddof=1) / np.sqrt(a.size)) if a.size > 1 else 0.0,
-                "min": float(a.min()),
-                "max": float(a.max()),
-                "n": float(a.size),
+                "mean": mean,
+                "sem": sem,
+                "min": float(min(finite)),
+                "max": float(max(finite)),
+                "n": float(n),
             }
     return out
-
-
-def default_run_dir() -> Path:
-    """Where evaluations keep their store unless told otherwise: $MTRNN_RUN_DIR or ./runs."""
-    return Path(os.environ.get("MTRNN_RUN_DIR", "runs"))

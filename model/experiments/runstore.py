@@ -1,4 +1,4 @@
-"""SQLite store of evaluation runs, their configs, metrics per split, checkpoints, and app jobs.
+"""SQLite store of evaluation runs: their configs, metrics per split, artifacts and checkpoints.
 
 One store lives in a run directory (`<run_dir>/runs.sqlite`, checkpoints under
 `<run_dir>/checkpoints/<run key>/`). Only the driver process writes to it (workers return their
@@ -12,7 +12,6 @@ Tables
          status, attempts, seconds, checkpoint, host, created, finished, error)
     metrics(run_key, split, name, value)         split in train / test / mixed (or a sweep's own)
     artifacts(run_key, name, json)               larger per-run results (Csc points for PCA panels)
-    jobs(id, kind, params, status, created, updated, progress, result, error)   app jobs
 """
 
 from __future__ import annotations
@@ -67,17 +66,6 @@ CREATE TABLE IF NOT EXISTS artifacts (
     name TEXT NOT NULL,
     json TEXT NOT NULL,
     PRIMARY KEY (run_key, name)
-);
-CREATE TABLE IF NOT EXISTS jobs (
-    id TEXT PRIMARY KEY,
-    kind TEXT NOT NULL,
-    params TEXT NOT NULL,
-    status TEXT NOT NULL,
-    created REAL NOT NULL,
-    updated REAL NOT NULL,
-    progress TEXT,
-    result TEXT,
-    error TEXT
 );
 """
 
@@ -346,59 +334,3 @@ class RunStore:
     def experiments(self) -> list[str]:
         with self._read() as db:
             return [r[0] for r in db.execute("SELECT DISTINCT experiment FROM runs ORDER BY experiment")]
-
-    # --- jobs of the app ------------------------------------------------------------------------
-
-    def put_job(self, job_id: str, kind: str, params: Mapping[str, Any], status: str) -> None:
-        now = time.time()
-        with self._transaction() as db:
-            db.execute(
-                "INSERT INTO jobs(id, kind, params, status, created, updated) VALUES (?, ?, ?, ?, ?, ?)",
-                (job_id, kind, canonical_json(params), status, now, now),
-            )
-
-    def update_job(
-        self,
-        job_id: str,
-        status: str | None = None,
-        progress: Any | None = None,
-        result: Any | None = None,
-        error: str | None = None,
-    ) -> None:
-        sets, args = ["updated = ?"], [time.time()]
-        for column, value in (("status", status), ("error", error)):
-            if value is not None:
-                sets.append(f"{column} = ?")
-                args.append(value)
-        for column, value in (("progress", progress), ("result", result)):
-            if value is not None:
-                sets.append(f"{column} = ?")
-                args.append(canonical_json(value))
-        with self._transaction() as db:
-            db.execute(f"UPDATE jobs SET {', '.join(sets)} WHERE id = ?", [*args, job_id])
-
-    def jobs(self, job_id: str | None = None) -> list[dict[str, Any]]:
-        sql = "SELECT * FROM jobs" + (" WHERE id = ?" if job_id else "") + " ORDER BY created DESC"
-        with self._read() as db:
-            rows = db.execute(sql, (job_id,) if job_id else ()).fetchall()
-        out = []
-        for r in rows:
-            d = dict(r)
-            for column in ("params", "progress", "result"):
-                d[column] = json.loads(d[column]) if d[column] else None
-            out.append(d)
-        return out
-
-    def mark_interrupted(self, active: tuple[str, ...] = ("queued", "running")) -> list[str]:
-        """Jobs that were active when the server stopped can never finish: mark them interrupted."""
-        with self._transaction() as db:
-            rows = db.execute(
-                f"SELECT id FROM jobs WHERE status IN ({','.join('?' * len(active))})", active
-            ).fetchall()
-            ids = [r["id"] for r in rows]
-            for job_id in ids:
-                db.execute(
-                    "UPDATE jobs SET status = 'interrupted', updated = ?, error = ? WHERE id = ?",
-                    (time.time(), "the server stopped while this job was running", job_id),
-                )
-        return ids

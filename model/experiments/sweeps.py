@@ -12,17 +12,15 @@ spreads over cores and Ray workers the same way; its table gives epochs, d_avg a
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from model.experiments.protocol import Engine, ProgressFn, ProtocolResult, apply_overrides, plan, run_protocol
+from model.experiments.protocol import ProtocolResult, apply_overrides, plan, run_protocol
 from model.experiments.runstore import RunRecord, RunSpec, RunStore
+from model.metrics import mean_sem
 
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
 PSI_COSINE_PAPER = (0.0, 1e-5, 5e-5, 2e-4)  # Fig. 3 (c-f)
@@ -56,14 +54,13 @@ def run_psi_s_sweep(
     store: RunStore,
     config: Mapping[str, Any],
     digest: str,
-    engine: Engine = "local",
-    workers: int = 2,
-    address: str | None = None,
     base_seed: int = 0,
-    progress: ProgressFn | None = None,
+    **engine: Any,
 ) -> ProtocolResult:
+    """Every (psi_s, fold, init) run not yet in `store`; `engine` as `run_protocol`'s (engine,
+    workers, address, progress)."""
     specs = psi_s_specs(values, mode, folds, inits, config, digest, base_seed)
-    return run_protocol(data, specs, store, engine, workers, address, progress=progress)
+    return run_protocol(data, specs, store, **engine)
 
 
 # --- the cosine experiment as engine tasks ---------------------------------------------------------
@@ -83,16 +80,15 @@ def cosine_run(
     mode: str,
     fold: int,
     seed: int,
-    config: Any = None,
+    config: Mapping[str, Any] | None = None,
     out_dir: Path | None = None,
 ) -> CosineRunResult:
-    """Engine runner for one run of the cosine experiment (3.2.2); the psi travels in `mode`
-    ("cosine:<psi>"), so the engine's (data, mode, fold, seed) signature carries everything."""
+    """Engine runner for one run of the cosine experiment (3.2.2): `config["psi"]` is its psi (the
+    engine's runner signature carries everything; the experiment needs no data)."""
     from model.experiments.cosine import train_cosine_once
 
-    psi = float(mode.split(":", 1)[1])
     started = time.perf_counter()
-    run = train_cosine_once(psi, seed)
+    run = train_cosine_once(float((config or {})["psi"]), seed)
     return CosineRunResult(
         metrics={
             "cosine": {
@@ -111,14 +107,15 @@ def cosine_run(
 
 def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list[RunSpec]:
     """`runs` seeded runs per psi, the same seeds for every psi (paired, as `model.experiments.cosine`);
-    mode "cosine:<psi>" carries the value to the runner."""
+    the config {"psi": value} carries the value to the runner."""
     return [
         RunSpec(
             experiment="cosine",
-            mode=f"cosine:{float(v)!r}",
+            mode="cosine",
             fold=i,
             init=r,
             seed=base_seed + r,
+            config={"psi": float(v)},
             params={"psi": float(v)},
         )
         for i, v in enumerate(values)
@@ -127,42 +124,32 @@ def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list
 
 
 def run_cosine_sweep(
-    values: Sequence[float],
-    runs: int,
-    store: RunStore,
-    engine: Engine = "local",
-    workers: int = 2,
-    address: str | None = None,
-    base_seed: int = 0,
-    progress: ProgressFn | None = None,
+    values: Sequence[float], runs: int, store: RunStore, base_seed: int = 0, **engine: Any
 ) -> ProtocolResult:
+    """Every (psi, run) of the cosine experiment not yet in `store`; `engine` as `run_protocol`'s."""
     specs = cosine_specs(values, runs, base_seed)
-    return run_protocol(None, specs, store, engine, workers, address, runner=COSINE_RUNNER, progress=progress)
+    return run_protocol(None, specs, store, runner=COSINE_RUNNER, **engine)
 
 
 # --- tables -----------------------------------------------------------------------------------------
-
-
-def mean_sem(values: Sequence[float]) -> tuple[float, float, int]:
-    a = np.asarray([v for v in values if v is not None and math.isfinite(v)], dtype=np.float64)
-    if a.size == 0:
-        return math.nan, math.nan, 0
-    sem = float(a.std(ddof=1) / math.sqrt(a.size)) if a.size > 1 else 0.0
-    return float(a.mean()), sem, int(a.size)
 
 
 def _metric(run: RunRecord, split: str, name: str) -> float | None:
     return run.metrics.get(split, {}).get(name)
 
 
+def _by_value(runs: Sequence[RunRecord], param: str) -> list[tuple[float, list[RunRecord]]]:
+    """The runs grouped by the value of sweep parameter `param`, in increasing order."""
+    groups: dict[float, list[RunRecord]] = {}
+    for r in runs:
+        groups.setdefault(float(r.params[param]), []).append(r)
+    return sorted(groups.items())
+
+
 def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list[dict[str, Any]]:
     """Per psi_s: mean and standard error over runs of the Fig. 9 (a-d) measures."""
-    by_value: dict[float, list[RunRecord]] = {}
-    for r in runs:
-        by_value.setdefault(float(r.params["psi_s"]), []).append(r)
     rows = []
-    for value in sorted(by_value):
-        group = by_value[value]
+    for value, group in _by_value(runs, "psi_s"):
         row: dict[str, Any] = {"psi_s": value, "runs": len(group)}
         for label, split, name in (
             ("mixed_f1", "mixed", "f1"),
@@ -174,7 +161,7 @@ def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list
             ("d_inter", "train", f"csc.{space}.d_inter"),
             ("d_intra", "train", f"csc.{space}.d_intra"),
         ):
-            mean, sem, _ = mean_sem([_metric(r, split, name) for r in group])  # type: ignore[misc]
+            mean, sem, _ = mean_sem([_metric(r, split, name) for r in group])
             row[label], row[f"{label}_sem"] = mean, sem
         rows.append(row)
     return rows
@@ -182,15 +169,11 @@ def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list
 
 def cosine_table(runs: Sequence[RunRecord]) -> list[dict[str, Any]]:
     """Per psi: mean and standard error over runs of epochs, d_avg and d_rel (Fig. 3 a, b)."""
-    by_value: dict[float, list[RunRecord]] = {}
-    for r in runs:
-        by_value.setdefault(float(r.params["psi"]), []).append(r)
     rows = []
-    for value in sorted(by_value):
-        group = by_value[value]
+    for value, group in _by_value(runs, "psi"):
         row: dict[str, Any] = {"psi": value, "runs": len(group)}
         for name in ("epochs", "converged", "d_avg", "d_rel", "target_d_avg", "target_d_rel"):
-            mean, sem, n = mean_sem([_metric(r, "cosine", name) for r in group])  # type: ignore[misc]
+            mean, sem, n = mean_sem([_metric(r, "cosine", name) for r in group])
             if n:
                 row[name], row[f"{name}_sem"] = mean, sem
         rows.append(row)

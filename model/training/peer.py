@@ -37,27 +37,26 @@ Training (`PeerConfig` defaults; the comparisons were measured on the shipped co
 
 from __future__ import annotations
 
-import json
-import logging
 import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
-from safetensors.torch import load_file, save_file
 from torch import Tensor, nn
 
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES, Lexicon, decode_text
 from model.multimtrnn import Description, pad_sequences
+from model.training.common import (
+    ProgressFn,
+    TrainedModel,
+    encode_utterances,
+    generation_steps,
+    torch_threads,
+)
 
-logger = logging.getLogger(__name__)
-
-WEIGHTS = "model.safetensors"
-META = "meta.json"
 # Training options of checkpoints saved before they existed: full-batch, constant lr, no clipping,
 # raw inputs at every step.
 LEGACY = {"batch": 0, "cosine": False, "clip": 0.0, "stride": 1, "normalise": False}
@@ -81,7 +80,7 @@ class PeerConfig:
     stride: int = 2  # the encoders read every stride-th step of proprioception and vision
     normalise: bool = True  # standardise every input feature by the training set's mean and std
     epochs: int = 300
-    margin: int = 10  # silent steps after the longest training utterance (as model.training)
+    margin: int = 10  # silent steps after the longest training utterance (as the MultiMTRNN modes)
     progress_every: int = 10
 
     def to_dict(self) -> dict[str, Any]:
@@ -90,10 +89,6 @@ class PeerConfig:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> PeerConfig:
         return cls(**d)
-
-
-def default_config() -> dict[str, Any]:
-    return PeerConfig().to_dict()
 
 
 class SequenceEncoder(nn.Module):
@@ -195,54 +190,80 @@ def _kld(target: Tensor, output: Tensor, eps: float = 1e-8) -> Tensor:
     return (t * (torch.log(t + eps) - torch.log(o + eps))).sum(dim=(1, 2)).mean()
 
 
-@dataclass
-class TrainedPeer:
-    model: PeerModel
-    history: list[dict]
-    meta: dict
-
-    @property
-    def lexicon(self) -> Lexicon:
-        return Lexicon(self.meta["lexicon"])
+def peer_config(config: PeerConfig | dict | None) -> PeerConfig:
+    """The peer's own config: a `PeerConfig` or its dict; anything else (None, or a MultiMTRNN's
+    config handed to every mode alike) means `PeerConfig`'s defaults."""
+    if isinstance(config, dict):
+        return PeerConfig.from_dict(config)
+    return config if isinstance(config, PeerConfig) else PeerConfig()
 
 
 def train_peer(
-    data: SequenceSet, config: PeerConfig | dict | None = None, seed: int = 0, progress: Any = None
-) -> TrainedPeer:
-    """Full-batch Adam on describe + reconstruct + binding; deterministic for a seed."""
-    config = PeerConfig.from_dict(config) if isinstance(config, dict) else (config or PeerConfig())
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # one run per core (as model.training)
-    try:
-        return _train_peer(data, config, seed, progress)
-    finally:
-        torch.set_num_threads(threads)
+    data: SequenceSet,
+    config: PeerConfig | dict | None = None,
+    seed: int = 0,
+    progress: ProgressFn | None = None,
+) -> TrainedModel:
+    """Minibatch Adam on describe + reconstruct + binding (module docstring); deterministic for a seed."""
+    with torch_threads(1):  # one run per core (as the MultiMTRNN modes)
+        return _Training(data, peer_config(config), seed).run(progress)
 
 
-def _train_peer(data: SequenceSet, config: PeerConfig, seed: int, progress: Any) -> TrainedPeer:
-    from model.training import encode_utterances, generation_steps
+class _Training:
+    """One peer training: the model, its padded inputs and targets, the optimiser."""
 
-    steps = generation_steps(data.utterances, config.margin)
-    model = PeerModel(config, steps, seed)
-    prop, prop_len = pad_sequences(data.proprioception, config.proprioception)
-    vis, vis_len = pad_sequences(data.vision, config.vision)
-    target, target_len = encode_utterances(data.utterances, steps)
-    if config.normalise:
-        model.somatosensory.fit_normalisation(prop, prop_len)
-        model.visual.fit_normalisation(vis, vis_len)
-    optimiser = torch.optim.Adam(model.parameters(), lr=config.lr)
-    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, config.epochs) if config.cosine else None
-    shuffle = torch.Generator().manual_seed(seed)  # minibatch order, deterministic for a seed
-    size = config.batch if config.batch > 0 else len(data)
-    history: list[dict] = []
-    started = time.perf_counter()
-    for epoch in range(1, config.epochs + 1):
+    def __init__(self, data: SequenceSet, config: PeerConfig, seed: int) -> None:
+        self.data, self.config, self.seed = data, config, seed
+        self.steps = generation_steps(data.utterances, config.margin)
+        self.model = PeerModel(config, self.steps, seed)
+        self.prop, self.prop_len = pad_sequences(data.proprioception, config.proprioception)
+        self.vis, self.vis_len = pad_sequences(data.vision, config.vision)
+        self.target, self.target_len = encode_utterances(data.utterances, self.steps)
+        if config.normalise:
+            self.model.somatosensory.fit_normalisation(self.prop, self.prop_len)
+            self.model.visual.fit_normalisation(self.vis, self.vis_len)
+        self.optimiser = torch.optim.Adam(self.model.parameters(), lr=config.lr)
+
+    def run(self, progress: ProgressFn | None) -> TrainedModel:
+        config, model = self.config, self.model
+        schedule = (
+            torch.optim.lr_scheduler.CosineAnnealingLR(self.optimiser, config.epochs)
+            if config.cosine
+            else None
+        )
+        shuffle = torch.Generator().manual_seed(self.seed)  # minibatch order, deterministic for a seed
+        history: list[dict] = []
+        started = time.perf_counter()
+        for epoch in range(1, config.epochs + 1):
+            totals = self.epoch(shuffle)
+            if schedule is not None:
+                schedule.step()
+            if epoch % max(1, config.progress_every) == 0 or epoch == config.epochs:
+                history.append(self.report(epoch, totals, progress))
+        model.eval()
+        meta = {
+            "mode": "peer",
+            "seed": self.seed,
+            "ids": list(self.data.ids),
+            "lexicon": list(Lexicon.from_sentences(self.data.utterances).words),
+            "generation_steps": self.steps,
+            "peer_config": config.to_dict(),
+            "seconds_total": time.perf_counter() - started,
+        }
+        return TrainedModel(model, history, meta)
+
+    def epoch(self, shuffle: torch.Generator) -> Tensor:
+        """One pass over the minibatches; the sums of (loss, describe, binding) over recordings."""
+        config, model, steps = self.config, self.model, self.steps
+        size = config.batch if config.batch > 0 else len(self.data)
         totals = torch.zeros(3)
-        for batch in torch.randperm(len(data), generator=shuffle).split(size):
-            optimiser.zero_grad()
-            _, _, z = model.perceive(prop[batch], prop_len[batch], vis[batch], vis_len[batch])
-            code_l = model.language(target[batch], target_len[batch])
-            tgt = target[batch]
+        for batch in torch.randperm(len(self.data), generator=shuffle).split(size):
+            self.optimiser.zero_grad()
+            _, _, z = model.perceive(
+                self.prop[batch], self.prop_len[batch], self.vis[batch], self.vis_len[batch]
+            )
+            code_l = model.language(self.target[batch], self.target_len[batch])
+            tgt = self.target[batch]
             both = model.decoder(torch.cat([z, code_l]), steps, torch.cat([tgt, tgt]), config.alpha)
             describe, reconstruct = _kld(tgt, both[: len(z)]), _kld(tgt, both[len(z) :])
             binding = ((z - code_l) ** 2).sum(dim=1).mean()
@@ -250,122 +271,23 @@ def _train_peer(data: SequenceSet, config: PeerConfig, seed: int, progress: Any)
             loss.backward()
             if config.clip > 0:
                 nn.utils.clip_grad_norm_(model.parameters(), config.clip)
-            optimiser.step()
+            self.optimiser.step()
             totals += len(batch) * torch.stack([loss, describe, binding]).detach()
-        if schedule is not None:
-            schedule.step()
-        if epoch % max(1, config.progress_every) == 0 or epoch == config.epochs:
-            loss_mean, describe_mean, binding_mean = (totals / len(data)).tolist()
-            entry = {
-                "stage": "peer",
-                "epoch": epoch,
-                "epochs": config.epochs,
-                "loss": loss_mean,
-                "describe": describe_mean,
-                "binding": binding_mean,
-            }
-            history.append(entry)
-            if progress is not None:
-                with torch.no_grad():
-                    _, _, z = model.perceive(prop, prop_len, vis, vis_len)
-                progress({**entry, "csc": z.tolist()})
-    model.eval()
-    meta = {
-        "mode": "peer",
-        "seed": seed,
-        "ids": list(data.ids),
-        "lexicon": list(Lexicon.from_sentences(data.utterances).words),
-        "generation_steps": steps,
-        "peer_config": config.to_dict(),
-        "seconds_total": time.perf_counter() - started,
-    }
-    return TrainedPeer(model, history, meta)
+        return totals
 
-
-def save(model: PeerModel, directory: str | Path, meta: dict) -> Path:
-    """safetensors weights + meta.json (no pickle)."""
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    save_file(
-        {k: v.detach().contiguous().clone() for k, v in model.state_dict().items()}, str(directory / WEIGHTS)
-    )
-    (directory / META).write_text(json.dumps(meta, indent=2, sort_keys=True, default=float))
-    return directory
-
-
-def load(directory: str | Path) -> tuple[PeerModel, dict]:
-    directory = Path(directory)
-    meta = json.loads((directory / META).read_text())
-    config = PeerConfig.from_dict({**LEGACY, **meta["peer_config"]})
-    model = PeerModel(config, int(meta["generation_steps"]))
-    state = model.state_dict()  # a legacy checkpoint has no normalisation buffers: they stay identity
-    state.update(load_file(str(directory / WEIGHTS)))
-    model.load_state_dict(state)
-    model.eval()
-    return model, meta
-
-
-@dataclass
-class PeerRunResult:
-    metrics: dict
-    model: PeerModel
-    seconds: float
-    meta: dict
-
-
-def run_once(
-    data: SequenceSet,
-    mode: str,
-    fold: int,
-    seed: int,
-    config: PeerConfig | dict | None = None,
-    out_dir: str | Path | None = None,
-    progress: Any = None,
-) -> PeerRunResult:
-    """`model.experiments.evaluation.run_once` for the peer: same split, same scoring, same metrics."""
-    from model.experiments.evaluation import fold_split, score_split, slot_vocabularies
-
-    if mode != "peer":
-        raise ValueError(f"model.training.peer.run_once trains the peer baseline only, not {mode!r}")
-    start = time.perf_counter()
-    train_idx, test_idx = fold_split(data.ids, fold, seed=0)
-    train_set, test_set = data.subset(train_idx), data.subset(test_idx)
-    trained = train_peer(train_set, config, seed, progress)
-    vocab = slot_vocabularies(data.utterances)
-    metrics = score_split(trained.model, trained.lexicon, train_set, test_set, vocab)
-    seconds = time.perf_counter() - start
-    meta = dict(trained.meta)
-    meta.update(
-        {
-            "fold": fold,
-            "split": {"train": list(train_set.ids), "test": list(test_set.ids)},
-            "metrics": metrics,
-            "seconds_run": seconds,
+    def report(self, epoch: int, totals: Tensor, progress: ProgressFn | None) -> dict:
+        """The history entry of `epoch`; `progress` also gets the fused codes z of every recording."""
+        loss_mean, describe_mean, binding_mean = (totals / len(self.data)).tolist()
+        entry = {
+            "stage": "peer",
+            "epoch": epoch,
+            "epochs": self.config.epochs,
+            "loss": loss_mean,
+            "describe": describe_mean,
+            "binding": binding_mean,
         }
-    )
-    if out_dir is not None:
-        save(trained.model, out_dir, meta)
-    logger.info(
-        "peer fold %d seed %d: test exact %.3f F1 %.3f (%.1f s)",
-        fold,
-        seed,
-        metrics["test"]["sentence_exact"],
-        metrics["test"]["f1"],
-        seconds,
-    )
-    return PeerRunResult(metrics, trained.model, seconds, meta)
-
-
-def _train_mode(data: SequenceSet, config: Any, seed: int, progress: Any = None) -> TrainedPeer:
-    """Entry of the training registry: `train(data, mode="peer")` (the MultiMTRNN config is not used;
-    the peer's own sizes are `PeerConfig`'s defaults)."""
-    return train_peer(data, None, seed, progress)
-
-
-def _register() -> None:
-    from model.training import register_mode
-
-    register_mode("peer", _train_mode)
-
-
-_register()
+        if progress is not None:
+            with torch.no_grad():
+                _, _, z = self.model.perceive(self.prop, self.prop_len, self.vis, self.vis_len)
+            progress({**entry, "csc": z.tolist()})
+        return entry

@@ -18,25 +18,30 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from data.recording import MAX_UPLOAD_BYTES, RecordingError
     from server.routes.describe import description_of
+    from server.services.corpus import Corpus
+    from server.services.describe import DescribeService
+    from server.services.models import ModelRegistry
     from server.settings import Settings
-    from server.state import AppState
 
-    state = AppState(Settings.from_env(model=args.model, viser=False))
+    settings = Settings.from_env(model=args.model, viser=False)
+    corpus = Corpus.load(settings)
+    models = ModelRegistry.serving(settings, corpus)
     try:
         data = args.recording.read_bytes()
     except OSError as exc:
         print(f"error: {exc}")
         return 2
-    if len(data) > state.backend.max_upload_bytes:
-        print(f"error: {args.recording} is larger than the limit of {state.backend.max_upload_bytes} bytes")
+    if len(data) > MAX_UPLOAD_BYTES:
+        print(f"error: {args.recording} is larger than the limit of {MAX_UPLOAD_BYTES} bytes")
         return 2
     try:
-        up = state.describe_upload(data, args.recording.name)
-    except state.backend.recording_error as exc:
+        up = DescribeService(corpus, models).describe_upload(data, args.recording.name)
+    except RecordingError as exc:
         print(f"error: {exc}")
         return 2
-    answer = description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels)
+    answer = description_of(up.result, up.id, "upload", up.model)
     if args.json:
         print(answer.model_dump_json(indent=1))
     else:

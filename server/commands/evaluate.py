@@ -4,8 +4,9 @@
     mtrnn evaluate --mode faithful --folds 2 --inits 1 --engine ray --set training.epochs_auditory=50
     mtrnn evaluate --mode peer --folds 10 --inits 10 --engine ray --address ray://head:10001 --json
 
-Results go to the run store in --run-dir (default $MTRNN_RUN_DIR or ./runs); running the same
-command again skips every finished run, so a killed evaluation is resumed by repeating it.
+Results go to the run store in --run-dir (default: `Settings.run_dir`, $MTRNN_RUN_DIR or runs/);
+running the same command again skips every finished run, so a killed evaluation is resumed by
+repeating it.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -28,18 +30,19 @@ def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers", type=int, default=2, help="local processes / CPUs of a local Ray instance"
     )
-    parser.add_argument("--run-dir", type=Path, default=None, help="run store folder (default: ./runs)")
+    parser.add_argument(
+        "--run-dir", type=Path, default=None, help="run store folder (default: $MTRNN_RUN_DIR or runs/)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="base seed; run (k, n) uses seed + 1000 k + n")
     parser.add_argument("--corpus", type=Path, default=None, help="encoded corpus (default: the shipped one)")
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a config value, e.g. training.epochs_auditory=200 (repeatable)",
-    )
+    example = "training.epochs_auditory=200"
+    add_assignments(parser, "--set", "overrides", f"override a config value, e.g. {example} (repeatable)")
     parser.add_argument("--json", action="store_true", help="print the summary and every run as JSON")
+
+
+def add_assignments(parser: argparse.ArgumentParser, flag: str, dest: str, text: str) -> None:
+    """A repeatable KEY=VALUE option (read by `parse_assignments`)."""
+    parser.add_argument(flag, dest=dest, action="append", default=[], metavar="KEY=VALUE", help=text)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -49,18 +52,40 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def parse_overrides(items: list[str]) -> dict[str, Any]:
-    """["training.psi_s=5e-4", ...] -> {"training.psi_s": 0.0005}; values are JSON where they parse."""
+def parse_assignments(items: list[str]) -> dict[str, Any]:
+    """["training.psi_s=5e-4", ...] -> {"training.psi_s": 0.0005}; values are JSON where they parse.
+    ValueError(item) for an item that is not KEY=VALUE."""
     out: dict[str, Any] = {}
     for item in items:
         key, sep, raw = item.partition("=")
-        if not sep:
-            raise SystemExit(f"error: --set needs KEY=VALUE, got {item!r}")
+        if not sep or not key:
+            raise ValueError(item)
         try:
             out[key] = json.loads(raw)
         except json.JSONDecodeError:
             out[key] = raw
     return out
+
+
+def parse_overrides(items: list[str]) -> dict[str, Any]:
+    """The --set values (`parse_assignments`); a malformed one ends the command with its error."""
+    try:
+        return parse_assignments(items)
+    except ValueError as err:
+        raise SystemExit(f"error: --set needs KEY=VALUE, got {err.args[0]!r}") from None
+
+
+def engine_options(args: argparse.Namespace, progress: Any) -> dict[str, Any]:
+    """`run_protocol`'s engine, workers, address and progress from the command's arguments."""
+    return {"engine": args.engine, "workers": args.workers, "address": args.address, "progress": progress}
+
+
+def run_store(run_dir: Path | None) -> Any:
+    """The run store in `run_dir`, by default the app's (`Settings.run_dir`: $MTRNN_RUN_DIR or runs/)."""
+    from model.experiments.runstore import RunStore
+    from server.settings import Settings
+
+    return RunStore(run_dir or Settings.from_env().run_dir)
 
 
 def load_data(corpus_path: Path | None) -> Any:
@@ -79,6 +104,15 @@ def build_config(overrides: dict[str, Any], mode: str = "faithful") -> dict[str,
         raise SystemExit(f"error: {err.args[0]}") from None
 
 
+def with_progress(store: Any, specs: list, run: Callable[[Any], Any]) -> Any:
+    """`run(progress)` under a bar over the runs of `specs` (those already done in `store` counted)."""
+    bar, update = progress_bar(len(specs), len(store.done_keys([s.key for s in specs])))
+    try:
+        return run(update)
+    finally:
+        bar.close()
+
+
 def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
     bar = tqdm(total=total, initial=already, unit="run", file=sys.stderr)
 
@@ -92,35 +126,15 @@ def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import (
-        data_digest,
-        default_run_dir,
-        plan,
-        run_protocol,
-        runner_for,
-        summarise,
-    )
-    from model.experiments.runstore import RunStore
+    from model.experiments.protocol import data_digest, plan, run_protocol, summarise
 
     config = build_config(parse_overrides(args.overrides), args.mode)
     data = load_data(args.corpus)
-    store = RunStore(args.run_dir or default_run_dir())
+    store = run_store(args.run_dir)
     specs = plan("evaluate", args.mode, args.folds, args.inits, config, data_digest(data), args.seed)
-    already = len(store.done_keys([s.key for s in specs]))
-    bar, update = progress_bar(len(specs), already)
-    try:
-        result = run_protocol(
-            data,
-            specs,
-            store,
-            args.engine,
-            args.workers,
-            args.address,
-            runner=runner_for(args.mode),
-            progress=update,
-        )
-    finally:
-        bar.close()
+    result = with_progress(
+        store, specs, lambda update: run_protocol(data, specs, store, **engine_options(args, update))
+    )
     summary = summarise(result.runs)
     answer = {
         "mode": args.mode,

@@ -1,6 +1,6 @@
 """`mtrnn report`: write docs/RESULTS.md and docs/figures/*.png from the run store.
 
-mtrnn report                       # store ./runs (or $MTRNN_RUN_DIR), shipped corpus
+mtrnn report                       # store runs/ (or $MTRNN_RUN_DIR), shipped corpus
 mtrnn report --run-dir runs --out docs/RESULTS.md --no-pca
 """
 
@@ -14,7 +14,9 @@ from server.settings import REPO_ROOT
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("report", help="write docs/RESULTS.md and its figures from the run store")
-    parser.add_argument("--run-dir", type=Path, default=None, help="run store folder (default: ./runs)")
+    parser.add_argument(
+        "--run-dir", type=Path, default=None, help="run store folder (default: $MTRNN_RUN_DIR or runs/)"
+    )
     parser.add_argument("--out", type=Path, default=REPO_ROOT / "docs" / "RESULTS.md")
     parser.add_argument(
         "--figures", type=Path, default=None, help="figure folder (default: figures/ beside --out)"
@@ -33,15 +35,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import default_run_dir
     from model.experiments.report import build_report
-    from model.experiments.runstore import RunStore
+    from server.commands.evaluate import load_data, run_store
 
-    store = RunStore(args.run_dir or default_run_dir())
+    store = run_store(args.run_dir)
     data = None
     if not args.no_pca:
-        from server.commands.evaluate import load_data
-
         data = load_data(args.corpus)
     figures = args.figures or args.out.parent / "figures"
     report = build_report(store, args.out, figures, data, args.commands, args.notes)

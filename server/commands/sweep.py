@@ -12,13 +12,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 
 from server.commands.evaluate import (
     add_engine_arguments,
     build_config,
+    engine_options,
     load_data,
     parse_overrides,
-    progress_bar,
+    run_store,
+    with_progress,
 )
 
 
@@ -40,7 +43,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     cosine.add_argument("--engine", choices=("local", "ray"), default="local")
     cosine.add_argument("--address", default=None)
     cosine.add_argument("--workers", type=int, default=2)
-    cosine.add_argument("--run-dir", default=None)
+    cosine.add_argument("--run-dir", type=Path, default=None)
     cosine.add_argument("--seed", type=int, default=0)
     cosine.add_argument("--json", action="store_true")
     cosine.set_defaults(func=run_cosine)
@@ -51,19 +54,19 @@ def _fmt(v: float, e: float) -> str:
 
 
 def run_psi_s(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import data_digest, default_run_dir
-    from model.experiments.runstore import RunStore
+    from model.experiments.protocol import data_digest
     from model.experiments.sweeps import PSI_S_PAPER, psi_s_specs, psi_s_table, run_psi_s_sweep
 
     values = args.values or list(PSI_S_PAPER)
     config = build_config(parse_overrides(args.overrides), args.mode)
     data = load_data(args.corpus)
-    store = RunStore(args.run_dir or default_run_dir())
+    store = run_store(args.run_dir)
     digest = data_digest(data)
     specs = psi_s_specs(values, args.mode, args.folds, args.inits, config, digest, args.seed)
-    bar, update = progress_bar(len(specs), len(store.done_keys([s.key for s in specs])))
-    try:
-        result = run_psi_s_sweep(
+    result = with_progress(
+        store,
+        specs,
+        lambda update: run_psi_s_sweep(
             data,
             values,
             args.mode,
@@ -72,14 +75,10 @@ def run_psi_s(args: argparse.Namespace) -> int:
             store,
             config,
             digest,
-            args.engine,
-            args.workers,
-            args.address,
             args.seed,
-            update,
-        )
-    finally:
-        bar.close()
+            **engine_options(args, update),
+        ),
+    )
     table = psi_s_table(result.runs)
     if args.json:
         print(json.dumps({"mode": args.mode, "table": table, "failed": len(result.failed)}, indent=1))
@@ -100,20 +99,16 @@ def run_psi_s(args: argparse.Namespace) -> int:
 
 
 def run_cosine(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import default_run_dir
-    from model.experiments.runstore import RunStore
     from model.experiments.sweeps import PSI_COSINE_PAPER, cosine_specs, cosine_table, run_cosine_sweep
 
     values = args.values or list(PSI_COSINE_PAPER)
-    store = RunStore(args.run_dir or default_run_dir())
+    store = run_store(args.run_dir)
     specs = cosine_specs(values, args.runs, args.seed)
-    bar, update = progress_bar(len(specs), len(store.done_keys([s.key for s in specs])))
-    try:
-        result = run_cosine_sweep(
-            values, args.runs, store, args.engine, args.workers, args.address, args.seed, update
-        )
-    finally:
-        bar.close()
+    result = with_progress(
+        store,
+        specs,
+        lambda update: run_cosine_sweep(values, args.runs, store, args.seed, **engine_options(args, update)),
+    )
     table = cosine_table(result.runs)
     if args.json:
         print(json.dumps({"table": table, "failed": len(result.failed)}, indent=1))

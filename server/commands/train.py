@@ -9,6 +9,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from server.commands.evaluate import add_assignments, parse_assignments
+
 logger = logging.getLogger(__name__)
 
 
@@ -22,36 +24,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", type=Path, required=True, help="checkpoint directory to write")
     parser.add_argument("--epochs-scale", type=float, default=1.0, help="multiply every stage's epochs")
     parser.add_argument("--corpus", type=Path, default=None, help="corpus .npz (default: the shipped one)")
-    parser.add_argument(
+    add_assignments(
+        parser,
         "--option",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a named option of the mode, e.g. assemblies_solver=optimum (faithful) or recombine=0 "
+        "option",
+        "a named option of the mode, e.g. assemblies_solver=optimum (faithful) or recombine=0 "
         "(end_to_end); repeatable",
     )
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
     parser.set_defaults(func=_train)
 
 
-def _option(text: str) -> tuple[str, object]:
-    key, sep, value = text.partition("=")
-    if not sep or not key:
-        raise ValueError(f"--option takes KEY=VALUE, got {text!r}")
-    try:
-        return key, json.loads(value)
-    except json.JSONDecodeError:
-        return key, value
-
-
 def _train(args: argparse.Namespace) -> int:
     from data.corpus import load_corpus
     from model.config import MultiMTRNNConfig
     from model.experiments.evaluation import run_once
-    from model.training import available_modes
+    from model.training import MODES
 
-    if args.mode not in available_modes():
-        print(f"error: unknown mode {args.mode!r}; available: {', '.join(available_modes())}")
+    if args.mode not in MODES:
+        print(f"error: unknown mode {args.mode!r}; available: {', '.join(sorted(MODES))}")
         return 2
     try:
         corpus = load_corpus(args.corpus)
@@ -61,9 +52,9 @@ def _train(args: argparse.Namespace) -> int:
     config = MultiMTRNNConfig()
     config.training = config.training.scaled(args.epochs_scale)
     try:
-        config.options = dict(_option(o) for o in args.option)
+        config.options = parse_assignments(args.option)
     except ValueError as err:
-        print(f"error: {err}")
+        print(f"error: --option takes KEY=VALUE, got {err.args[0]!r}")
         return 2
     data = corpus.training_data()
 

@@ -6,17 +6,20 @@ from fastapi import APIRouter, HTTPException, Request, Response
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
-from server.schemas import CscVectors, Description, Problem, RecordingDetail, Timings
-from server.state import VISION_FEATURE_NAMES, Result, StateDep
+from data.recording import MAX_UPLOAD_BYTES
+from model.encoding.utterance import PHONEMES
+from model.metrics import sentence_exact
+from server.deps import DescribeDep, ModelsDep
+from server.routes.scenes import recording_detail, rows
+from server.schemas.common import Problem
+from server.schemas.describe import CscVectors, Description, Timings
+from server.schemas.scenes import RecordingDetail
+from server.services.describe import Result
 
 router = APIRouter(prefix="/api", tags=["describe"])
 
 
-def _rows(array, digits: int = 4) -> list[list[float]]:  # noqa: ANN001 - any 2-D array
-    return [[round(float(v), digits) for v in row] for row in array]
-
-
-def description_of(result: Result, rid: str, source: str, model: str, labels: list[str]) -> Description:
+def description_of(result: Result, rid: str, source: str, model: str) -> Description:
     """The API's answer for one described recording (also what `mtrnn describe --json` prints)."""
     expected = result.expected
     return Description(
@@ -27,10 +30,10 @@ def description_of(result: Result, rid: str, source: str, model: str, labels: li
         words=result.words,
         phonemes=result.phonemes,
         expected=expected,
-        correct=None if expected is None else result.text.strip().lower() == expected.strip().lower(),
-        phoneme_labels=labels,
-        activity=_rows(result.activity),
-        target_activity=None if result.target_activity is None else _rows(result.target_activity),
+        correct=None if expected is None else sentence_exact(result.text, expected),
+        phoneme_labels=list(PHONEMES),
+        activity=rows(result.activity, 4),
+        target_activity=None if result.target_activity is None else rows(result.target_activity, 4),
         csc=CscVectors(**{k: [round(float(x), 6) for x in v] for k, v in result.csc.items()}),
         timings=Timings(**{k: round(v, 3) for k, v in result.timings.items()}),
     )
@@ -46,18 +49,22 @@ def _json(answer: Description) -> Response:
     response_model=None,
     responses={200: {"model": Description}, 404: {"model": Problem}},
 )
-def describe_scene(state: StateDep, rid: str) -> Response:
+def describe_scene(describe: DescribeDep, models: ModelsDep, rid: str) -> Response:
     """What the served model says about a corpus recording (from its stored encodings)."""
-    result = state.describe_scene(rid)
-    return _json(description_of(result, rid, "corpus", state.model.name, state.backend.phoneme_labels))
+    result = describe.describe_scene(rid)
+    return _json(description_of(result, rid, "corpus", models.served.name))
 
 
-async def _read_capped(upload: UploadFile, cap: int) -> bytes:
+def _too_large() -> HTTPException:
+    return HTTPException(413, f"the recording is larger than the limit of {MAX_UPLOAD_BYTES / 2**20:.0f} MiB")
+
+
+async def _read_capped(upload: UploadFile) -> bytes:
     chunks, size = [], 0
     while chunk := await upload.read(1 << 20):
         size += len(chunk)
-        if size > cap:
-            raise HTTPException(413, f"the recording is larger than the limit of {cap / 2**20:.0f} MiB")
+        if size > MAX_UPLOAD_BYTES:
+            raise _too_large()
         chunks.append(chunk)
     return b"".join(chunks)
 
@@ -85,12 +92,11 @@ async def _read_capped(upload: UploadFile, cap: int) -> bytes:
         }
     },
 )
-async def describe_upload(state: StateDep, request: Request) -> Response:
+async def describe_upload(describe: DescribeDep, request: Request) -> Response:
     """Upload a recording in format v1 (multipart field ``recording``, a .zip or .npz) and describe it."""
-    cap = state.backend.max_upload_bytes
     declared = request.headers.get("content-length")
-    if declared and declared.isdigit() and int(declared) > cap + (1 << 16):
-        raise HTTPException(413, f"the recording is larger than the limit of {cap / 2**20:.0f} MiB")
+    if declared and declared.isdigit() and int(declared) > MAX_UPLOAD_BYTES + (1 << 16):
+        raise _too_large()
     try:
         form = await request.form(max_files=1, max_fields=4)
     except Exception as exc:  # malformed multipart body
@@ -98,41 +104,24 @@ async def describe_upload(state: StateDep, request: Request) -> Response:
     upload = form.get("recording")
     if not isinstance(upload, UploadFile):
         raise HTTPException(422, "send the recording as a file in the multipart field 'recording'")
-    data = await _read_capped(upload, cap)
+    data = await _read_capped(upload)
     filename = upload.filename or "recording"
     if not data:
         raise HTTPException(400, f"{filename}: the file is empty")
-    try:
-        up = await run_in_threadpool(state.describe_upload, data, filename)
-    except state.backend.recording_error as exc:
-        raise HTTPException(400, str(exc)) from exc
-    return _json(description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels))
+    up = await run_in_threadpool(describe.describe_upload, data, filename)  # RecordingError: 400
+    return _json(description_of(up.result, up.id, "upload", up.model))
 
 
 @router.get("/uploads/{uid}", response_model=RecordingDetail, responses={404: {"model": Problem}})
-def get_upload(state: StateDep, uid: str) -> RecordingDetail:
+def get_upload(describe: DescribeDep, uid: str) -> RecordingDetail:
     """The time series of an uploaded recording (kept while the server runs)."""
-    up = state.upload(uid)
-    rec = up.recording
-    fps = float(getattr(rec, "fps", 20.0) or 20.0)
-    frames = len(rec.joints)
-    return RecordingDetail(
-        id=up.id,
-        source="upload",
-        fps=fps,
-        frames=frames,
-        duration_s=frames / fps,
-        utterance=up.result.expected,
-        joint_names=state.backend.joint_names,
-        joints=_rows(rec.joints, 5),
-        proprioception=_rows(up.proprioception, 5),
-        vision=_rows(up.vision, 5),
-        vision_feature_names=VISION_FEATURE_NAMES[: up.vision.shape[1]],
-    )
+    up = describe.upload(uid)
+    series = (up.recording.joints, up.proprioception, up.vision)
+    return recording_detail(up.id, "upload", series, up.result.expected)
 
 
 @router.get("/uploads/{uid}/description", response_model=Description, responses={404: {"model": Problem}})
-def get_upload_description(state: StateDep, uid: str) -> Description:
+def get_upload_description(describe: DescribeDep, uid: str) -> Description:
     """The description computed when the recording was uploaded."""
-    up = state.upload(uid)
-    return description_of(up.result, up.id, "upload", up.model, state.backend.phoneme_labels)
+    up = describe.upload(uid)
+    return description_of(up.result, up.id, "upload", up.model)

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from server.schemas import Health
-from server.state import StateDep
+from server.deps import ServicesDep
+from server.schemas.common import Health
 
 router = APIRouter(prefix="/api", tags=["health"])
 
 
 @router.get("/health", response_model=Health)
-def health(state: StateDep) -> Health:
-    return Health(model=state.model.name, scenes=len(state.entries), viewer=state.viewer is not None)
+def health(services: ServicesDep) -> Health:
+    return Health(
+        model=services.models.served.name,
+        scenes=len(services.corpus.entries),
+        viewer=services.viewer is not None,
+    )

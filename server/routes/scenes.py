@@ -2,17 +2,29 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
+import numpy as np
 from fastapi import APIRouter, Query, Response
 
-from server.schemas import RecordingDetail, SceneList, SceneSummary
-from server.state import VISION_FEATURE_NAMES, AppState, StateDep
+from data.nao import JOINT_NAMES
+from data.world import FPS
+from server.deps import CorpusDep, DescribeDep, ModelsDep
+from server.schemas.scenes import RecordingDetail, SceneList, SceneSummary
+from server.services.corpus import frame_jpeg
+from server.services.models import LoadedModel
 
 router = APIRouter(prefix="/api/scenes", tags=["scenes"])
 
+VISION_FEATURE_NAMES = [f"d{k + 1}" for k in range(16)] + ["R", "G", "B", "centroid x", "centroid y"]
 
-def summary_of(state: AppState, entry) -> SceneSummary:  # noqa: ANN001 - a corpus entry
+
+def rows(array: Any, digits: int = 5) -> list[list[float]]:
+    """A 2-D array as rows of rounded floats."""
+    return [[round(float(v), digits) for v in row] for row in array]
+
+
+def summary_of(served: LoadedModel, entry: Any) -> SceneSummary:
     frames = len(entry.joints)
     return SceneSummary(
         id=entry.id,
@@ -22,15 +34,22 @@ def summary_of(state: AppState, entry) -> SceneSummary:  # noqa: ANN001 - a corp
         shape=entry.scene.shape,
         variant=entry.variant,
         utterance=entry.utterance,
-        split=state.split_of(entry.id),  # type: ignore[arg-type]
+        split=served.split_of(entry.id),  # type: ignore[arg-type]
         frames=frames,
-        duration_s=frames / 20.0,
+        duration_s=frames / FPS,
     )
+
+
+def _matches(s: SceneSummary, filters: dict[str, Any], q: str | None) -> bool:
+    if any(value is not None and getattr(s, key) != value for key, value in filters.items()):
+        return False
+    return not q or q.lower() in s.id or q.lower() in s.utterance
 
 
 @router.get("", response_model=SceneList)
 def list_scenes(
-    state: StateDep,
+    corpus: CorpusDep,
+    models: ModelsDep,
     action: Annotated[str | None, Query(description="pull, push, show me or slide")] = None,
     colour: Annotated[str | None, Query(description="blue, green, red or yellow")] = None,
     shape: Annotated[str | None, Query(description="apple, banana, dice or phone")] = None,
@@ -40,43 +59,49 @@ def list_scenes(
     ] = None,
     q: Annotated[str | None, Query(description="substring of the id or utterance")] = None,
 ) -> SceneList:
-    out = []
-    for entry in state.entries.values():
-        s = summary_of(state, entry)
-        if action and s.action != action.replace("-", " "):
-            continue
-        if (colour and s.colour != colour) or (shape and s.shape != shape):
-            continue
-        if (variant is not None and s.variant != variant) or (split and s.split != split):
-            continue
-        if q and q.lower() not in s.id and q.lower() not in s.utterance:
-            continue
-        out.append(s)
+    filters = {
+        "action": action.replace("-", " ") if action else None,
+        "colour": colour or None,
+        "shape": shape or None,
+        "variant": variant,
+        "split": split or None,
+    }
+    served = models.served
+    out = [s for e in corpus.entries.values() if _matches(s := summary_of(served, e), filters, q)]
     return SceneList(total=len(out), scenes=out)
 
 
-def _rows(array) -> list[list[float]]:  # noqa: ANN001 - any 2-D array
-    return [[round(float(v), 5) for v in row] for row in array]
+def recording_detail(
+    rid: str,
+    source: str,
+    series: tuple[np.ndarray, np.ndarray, np.ndarray],
+    utterance: str | None,
+    summary: SceneSummary | None = None,
+) -> RecordingDetail:
+    """The time series (joints, proprioception, vision) of a recording at data.world.FPS."""
+    joints, proprioception, vision = series
+    frames = len(joints)
+    return RecordingDetail(
+        id=rid,
+        source=source,  # type: ignore[arg-type]
+        fps=FPS,
+        frames=frames,
+        duration_s=frames / FPS,
+        utterance=utterance,
+        joint_names=list(JOINT_NAMES),
+        joints=rows(joints),
+        proprioception=rows(proprioception),
+        vision=rows(vision),
+        vision_feature_names=VISION_FEATURE_NAMES[: vision.shape[1]],
+        summary=summary,
+    )
 
 
 @router.get("/{rid}", response_model=RecordingDetail)
-def get_scene(state: StateDep, rid: str) -> RecordingDetail:
-    entry = state.entry(rid)
-    frames = len(entry.joints)
-    return RecordingDetail(
-        id=entry.id,
-        source="corpus",
-        fps=20.0,
-        frames=frames,
-        duration_s=frames / 20.0,
-        utterance=entry.utterance,
-        joint_names=state.backend.joint_names,
-        joints=_rows(entry.joints),
-        proprioception=_rows(entry.proprioception),
-        vision=_rows(entry.vision),
-        vision_feature_names=VISION_FEATURE_NAMES[: entry.vision.shape[1]],
-        summary=summary_of(state, entry),
-    )
+def get_scene(corpus: CorpusDep, models: ModelsDep, rid: str) -> RecordingDetail:
+    entry = corpus.entry(rid)
+    series = (entry.joints, entry.proprioception, entry.vision)
+    return recording_detail(entry.id, "corpus", series, entry.utterance, summary_of(models.served, entry))
 
 
 @router.get(
@@ -85,12 +110,12 @@ def get_scene(state: StateDep, rid: str) -> RecordingDetail:
     responses={200: {"content": {"image/jpeg": {}}}},
 )
 def get_frame(
-    state: StateDep,
+    describe: DescribeDep,
     rid: str,
     index: int,
     overlay: Annotated[bool, Query(description="draw the vision pipeline's contour and 16 rays")] = False,
     width: Annotated[int | None, Query(ge=16, le=1280, description="scale down to this width")] = None,
 ) -> Response:
     """One camera frame of a corpus recording (re-rendered from its seed) or of an upload."""
-    data = state.frame_jpeg(rid, index, overlay, width)
+    data = frame_jpeg(describe.frames(rid), rid, index, overlay, width)
     return Response(data, media_type="image/jpeg", headers={"Cache-Control": "max-age=3600"})

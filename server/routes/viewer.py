@@ -15,8 +15,11 @@ from fastapi.responses import FileResponse
 from starlette.concurrency import run_in_threadpool
 
 from data.scenario import scene_from_utterance
-from server.schemas import Problem, ViewerCommand, ViewerState
-from server.state import AppState, StateDep
+from data.world import FPS
+from server.deps import Services, ServicesDep, services_of
+from server.schemas.common import Problem
+from server.schemas.viewer import ViewerCommand, ViewerState
+from server.services.errors import ServiceError, Unavailable
 from server.viewer import SceneViewer
 
 router = APIRouter(tags=["viewer"])
@@ -24,50 +27,48 @@ router = APIRouter(tags=["viewer"])
 VISER_CLIENT = Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
 
 
-def _viewer(state: AppState) -> SceneViewer:
-    if state.viewer is None:
-        raise HTTPException(503, "the 3D viewer is not running (started with MTRNN_VISER=0)")
-    return state.viewer
+def _viewer(services: Services) -> SceneViewer:
+    if services.viewer is None:
+        raise Unavailable("the 3D viewer is not running (started with MTRNN_VISER=0)")
+    return services.viewer
 
 
-def _state(state: AppState) -> ViewerState:
-    if state.viewer is None:
+def _state(services: Services) -> ViewerState:
+    if services.viewer is None:
         return ViewerState(available=False, source=None, t=0.0, duration_s=0.0, playing=False, speed=1.0)
-    return ViewerState(available=True, **state.viewer.state())
+    return ViewerState(available=True, **services.viewer.state())
 
 
-def show(state: AppState, source: str) -> None:
-    """Load a corpus recording or an upload into the 3D view."""
-    viewer = _viewer(state)
+def show(services: Services, source: str) -> None:
+    """Load a corpus recording or an upload into the 3D view (recordings are at data.world.FPS)."""
+    viewer = _viewer(services)
     if source.startswith("upload-"):
-        up = state.upload(source)
+        up = services.describe.upload(source)
         colour = shape = None
         if up.result.expected:
             with contextlib.suppress(ValueError):
                 scene = scene_from_utterance(up.result.expected)
                 colour, shape = scene.colour, scene.shape
-        viewer.show(
-            source, up.recording.joints, float(getattr(up.recording, "fps", 20.0) or 20.0), colour, shape
-        )
+        viewer.show(source, up.recording.joints, FPS, colour, shape)
     else:
-        entry = state.entry(source)
-        viewer.show(source, entry.joints, 20.0, entry.scene.colour, entry.scene.shape)
+        entry = services.corpus.entry(source)
+        viewer.show(source, entry.joints, FPS, entry.scene.colour, entry.scene.shape)
 
 
 @router.get("/api/viewer", response_model=ViewerState)
-def get_viewer(state: StateDep) -> ViewerState:
+def get_viewer(services: ServicesDep) -> ViewerState:
     """Where the shared time cursor is."""
-    return _state(state)
+    return _state(services)
 
 
 @router.post(
     "/api/viewer", response_model=ViewerState, responses={404: {"model": Problem}, 503: {"model": Problem}}
 )
-async def command_viewer(state: StateDep, cmd: ViewerCommand) -> ViewerState:
+async def command_viewer(services: ServicesDep, cmd: ViewerCommand) -> ViewerState:
     """Show a recording, move the cursor, play, pause or change the speed."""
-    viewer = _viewer(state)
+    viewer = _viewer(services)
     if cmd.show is not None and cmd.show != viewer.cursor.source:
-        await run_in_threadpool(show, state, cmd.show)
+        await run_in_threadpool(show, services, cmd.show)
     if cmd.speed is not None:
         viewer.set_speed(cmd.speed)
     if cmd.t is not None:
@@ -76,16 +77,16 @@ async def command_viewer(state: StateDep, cmd: ViewerCommand) -> ViewerState:
         viewer.play()
     elif cmd.playing is False:
         viewer.pause()
-    return _state(state)
+    return _state(services)
 
 
 @router.websocket("/api/viewer/ws")
 async def viewer_socket(ws: WebSocket) -> None:
     """Pushes the cursor on every change; accepts the same commands as POST /api/viewer."""
-    state: AppState = ws.app.state.mtrnn
+    services = services_of(ws)
     await ws.accept()
-    if state.viewer is None:
-        await ws.send_json(_state(state).model_dump())
+    if services.viewer is None:
+        await ws.send_json(_state(services).model_dump())
         await ws.close()
         return
     loop = asyncio.get_running_loop()
@@ -94,10 +95,10 @@ async def viewer_socket(ws: WebSocket) -> None:
     def push(cursor: dict) -> None:
         loop.call_soon_threadsafe(lambda: queue.full() or queue.put_nowait(cursor))
 
-    unsubscribe = state.viewer.subscribe(push)
+    unsubscribe = services.viewer.subscribe(push)
 
     async def sender() -> None:
-        await ws.send_json(_state(state).model_dump())
+        await ws.send_json(_state(services).model_dump())
         while True:
             cursor = await queue.get()
             while not queue.empty():  # only the newest matters
@@ -108,8 +109,8 @@ async def viewer_socket(ws: WebSocket) -> None:
     try:
         while True:
             cmd = ViewerCommand(**json.loads(await ws.receive_text()))
-            await command_viewer(state, cmd)
-    except (WebSocketDisconnect, ValueError, HTTPException):
+            await command_viewer(services, cmd)
+    except (WebSocketDisconnect, ValueError, HTTPException, ServiceError):
         pass
     finally:
         unsubscribe()
@@ -119,21 +120,21 @@ async def viewer_socket(ws: WebSocket) -> None:
 @router.get("/viser/", include_in_schema=False)
 def viser_client(request: Request) -> FileResponse:
     """viser's web client (one file); it connects back to ws://<this origin>/viser."""
-    _viewer(request.app.state.mtrnn)
+    _viewer(services_of(request))
     return FileResponse(VISER_CLIENT, media_type="text/html")
 
 
 @router.websocket("/viser")
 async def viser_proxy(ws: WebSocket) -> None:
     """Relay the viser client's WebSocket to the viser server on 127.0.0.1, keeping its subprotocol."""
-    state: AppState = ws.app.state.mtrnn
-    if state.viewer is None:
+    viewer = services_of(ws).viewer
+    if viewer is None:
         await ws.close(code=1011)
         return
     offered = ws.scope.get("subprotocols") or []
     try:
         upstream = await websockets.connect(
-            f"ws://127.0.0.1:{state.viewer.port}",
+            f"ws://127.0.0.1:{viewer.port}",
             subprotocols=offered or None,  # e.g. "viser-v1.1.1": viser checks the client's version
             max_size=None,
             compression=None,

@@ -385,7 +385,7 @@ def zeros_member_zip(megabytes: int) -> bytes:
 def test_decompression_bomb_total_size_is_rejected_before_decompressing(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import data.recording as recording
+    import data.recording.read as recording
 
     monkeypatch.setattr(recording, "MAX_UNCOMPRESSED_BYTES", 4 * 1024**2)  # 400 MB in production
     data = zeros_member_zip(6)
@@ -394,7 +394,7 @@ def test_decompression_bomb_total_size_is_rejected_before_decompressing(
 
 
 def test_decompression_bomb_compression_ratio_is_rejected(monkeypatch: pytest.MonkeyPatch) -> None:
-    import data.recording as recording
+    import data.recording.read as recording
 
     monkeypatch.setattr(recording, "BOMB_MIN_MEMBER_BYTES", 2 * 1024**2)  # 50 MB in production
     msg = read_err(zeros_member_zip(3))
@@ -483,7 +483,7 @@ def test_npz_at_another_rate_is_resampled() -> None:
 def test_oversized_file_on_disk_is_refused_before_reading(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import data.recording as recording
+    import data.recording.read as recording
 
     monkeypatch.setattr(recording, "MAX_UPLOAD_BYTES", 1000)
     path = tmp_path / "big.zip"

@@ -10,7 +10,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-from benchmarks.robustness import (
+from benchmarks.shifts import (
     SHIFTS,
     VARIANTS,
     Plan,

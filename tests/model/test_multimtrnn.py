@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import torch
 
+from model.assemblies import ASSEMBLIES, CellAssemblies
 from model.encoding.utterance import PHONEMES, Lexicon
 from model.mtrnn import scaled_logistic
-from model.multimtrnn import ASSEMBLIES, CellAssemblies, Description, MultiMTRNN, pad_sequences
+from model.multimtrnn import Description, MultiMTRNN, pad_sequences
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 

@@ -5,23 +5,23 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from explorer_artefacts import Exported, build_artefacts
+from explorer_artefacts import Exported
 from fastapi.testclient import TestClient
 
 from data.corpus import export_recording, load_corpus
 from data.recording import write_npz, write_zip
-from server.app import create_app
 from server.settings import Settings
+from tests.app_builder import build_app, explorer
 
 
 @pytest.fixture(scope="session")
 def settings(tmp_path_factory: pytest.TempPathFactory) -> Settings:
-    return build_artefacts(tmp_path_factory.mktemp("explorer"))
+    return explorer(tmp_path_factory.mktemp("explorer"))
 
 
 @pytest.fixture(scope="session")
 def client(settings: Settings) -> Iterator[TestClient]:
-    with TestClient(create_app(settings)) as c:
+    with TestClient(build_app(settings)) as c:
         yield c
 
 

@@ -1,8 +1,9 @@
 """A small synthetic world for the lesson tests, benchmark and screenshots while the shipped corpus
 and model are not there: all 64 scenes x 2 teachers with proprioception that depends on the action
 (and a little on the object), vision features per colour and shape, simple rendered frames, and two
-untrained MultiMTRNNs (Table 1 sizes) saved as checkpoints. `make_state(settings)` builds the app's
-`AppState` over it, through the same code path as the real artefacts."""
+untrained MultiMTRNNs (Table 1 sizes) saved as checkpoints. `load_world(settings)` is the app's
+`Corpus` over it (`server.app.create_app(settings, load_world)`): the rest of the app runs the same
+code as on the real artefacts."""
 
 from __future__ import annotations
 
@@ -18,8 +19,8 @@ from model import checkpoint
 from model.encoding import proprioception
 from model.encoding.utterance import Lexicon
 from model.multimtrnn import MultiMTRNN
+from server.services.corpus import Corpus
 from server.settings import Settings
-from server.state import AppState, Backend
 
 RGB = {"blue": (40, 88, 220), "green": (40, 170, 70), "red": (210, 40, 40), "yellow": (230, 184, 0)}
 SHAPE_PROFILE = {"apple": 0.45, "banana": 0.75, "dice": 0.5, "phone": 0.62}
@@ -76,23 +77,6 @@ def render(scene, frames: int = FRAMES) -> np.ndarray:  # noqa: ANN001 - a data.
     return out
 
 
-class WorldBackend(Backend):
-    """The app's Backend with the synthetic corpus in place of data/artefacts/corpus.npz."""
-
-    def __init__(self, corpus: SimpleNamespace) -> None:
-        super().__init__()
-        self._world = corpus
-
-    def load_corpus(self, path: Path | None) -> SimpleNamespace:
-        return self._world
-
-    def export_recording(self, rid: str, seed: int = 0) -> SimpleNamespace:
-        entry = next(e for e in self._world.entries if e.id == rid)
-        return SimpleNamespace(
-            frames=render(entry.scene), joints=entry.joints, fps=20.0, utterance=entry.utterance
-        )
-
-
 def build(root: Path) -> Settings:
     """Write two untrained models under root/models and return the app's settings for them."""
     corpus_entries = [_entry(s, v) for s in all_scenes() for v in VARIANTS]
@@ -114,9 +98,9 @@ def build(root: Path) -> Settings:
     return Settings(models_dir=root / "models", model="faithful", viser=False)
 
 
-def make_state_factory(settings: Settings):  # noqa: ANN201 - Callable[[Settings], AppState]
-    corpus = SimpleNamespace(
-        entries=[_entry(s, v) for s in all_scenes() for v in VARIANTS], seed=0, path=None
-    )
-    backend = WorldBackend(corpus)
-    return lambda s: AppState(s, backend)
+def load_world(settings: Settings) -> Corpus:
+    """The synthetic corpus (64 scenes x 2 teachers), its frames rendered by `render`."""
+    entries = [_entry(s, v) for s in all_scenes() for v in VARIANTS]
+    scenes = {e.id: e.scene for e in entries}
+    world = SimpleNamespace(entries=entries, seed=0, path=None)
+    return Corpus(world, settings.frame_cache, render=lambda rid, seed: render(scenes[rid]))

@@ -81,8 +81,7 @@ def test_upload_without_the_recording_field_is_422(client: TestClient) -> None:
 
 
 def test_upload_over_the_size_cap_is_413(client: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
-    state = client.app.state.mtrnn
-    monkeypatch.setattr(state.backend, "max_upload_bytes", 4096)
+    monkeypatch.setattr("server.routes.describe.MAX_UPLOAD_BYTES", 4096)
     big = b"PK\x03\x04" + bytes(10_000)
     response = client.post("/api/describe", files={"recording": ("big.zip", big)})
     assert response.status_code == 413 and "limit" in response.json()["detail"]

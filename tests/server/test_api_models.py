@@ -8,14 +8,14 @@ import pytest
 from fastapi.testclient import TestClient
 
 from data.corpus import load_corpus
-from server.app import create_app
 from server.settings import Settings
+from tests.app_builder import build_app
 
 
 @pytest.fixture()
 def fresh(settings: Settings) -> Iterator[TestClient]:
     """An app of its own: selecting a model must not leak into the other tests."""
-    with TestClient(create_app(settings)) as c:
+    with TestClient(build_app(settings)) as c:
         yield c
 
 

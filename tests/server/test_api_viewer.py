@@ -10,13 +10,13 @@ import pytest
 from fastapi.testclient import TestClient
 
 from data.corpus import load_corpus
-from server.app import create_app
 from server.settings import Settings
+from tests.app_builder import build_app
 
 
 @pytest.fixture(scope="module")
 def with_viewer(settings: Settings) -> Iterator[TestClient]:
-    with TestClient(create_app(dataclasses.replace(settings, viser=True))) as c:
+    with TestClient(build_app(dataclasses.replace(settings, viser=True))) as c:
         yield c
 
 
@@ -36,7 +36,7 @@ def test_show_seek_play_pause_move_one_cursor(with_viewer: TestClient, settings:
     assert with_viewer.post("/api/viewer", json={"playing": True}).json()["playing"] is True
     assert with_viewer.post("/api/viewer", json={"playing": False}).json()["playing"] is False
     assert with_viewer.post("/api/viewer", json={"show": "nope-0"}).status_code == 404
-    viewer = with_viewer.app.state.mtrnn.viewer
+    viewer = with_viewer.app.state.services.viewer
     with_viewer.post("/api/viewer", json={"t": 0.0})
     hand = tuple(float(v) for v in viewer.joints[-1].position)
     with_viewer.post("/api/viewer", json={"t": 1.5})

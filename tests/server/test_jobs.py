@@ -4,11 +4,7 @@ model, can be cancelled, and jobs survive a server restart (unfinished ones mark
 from __future__ import annotations
 
 import json
-import os
 import signal
-import socket
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -17,11 +13,8 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "model"))
-
-from server.jobs import JobManager  # noqa: E402
-from server.routes.jobs import router  # noqa: E402
+from server.jobs.manager import JobManager
+from tests.app_builder import JOBS_ROUTERS, build_app, explorer, jobs_settings, serve_jobs_app
 
 TINY = {
     "training.epochs_auditory": 4,
@@ -33,12 +26,8 @@ TINY = {
 ENDLESS = {**TINY, "training.epochs_auditory": 10_000_000}
 
 
-def _app(tmp_path: Path) -> tuple[FastAPI, JobManager]:
-    app = FastAPI()
-    app.include_router(router)
-    jobs = JobManager(tmp_path / "runs", tmp_path / "models", data_loader="tiny_data:tiny_sequence_set")
-    app.state.jobs = jobs
-    return app, jobs
+def _app(tmp_path: Path) -> FastAPI:
+    return build_app(jobs_settings(tmp_path), routers=JOBS_ROUTERS)
 
 
 def _events(client: TestClient, job_id: str) -> list[dict]:
@@ -60,8 +49,7 @@ def _wait(predicate, timeout: float = 120.0) -> None:
 
 @pytest.mark.slow
 def test_a_training_job_streams_progress_with_csc_points_and_saves_a_model(tmp_path) -> None:
-    app, jobs = _app(tmp_path)
-    with TestClient(app) as client:
+    with TestClient(_app(tmp_path)) as client:
         r = client.post(
             "/api/jobs", json={"kind": "train", "mode": "faithful", "name": "tiny", "overrides": TINY}
         )
@@ -87,8 +75,7 @@ def test_a_training_job_streams_progress_with_csc_points_and_saves_a_model(tmp_p
 
 
 def test_bad_job_requests_are_refused_with_a_reason(tmp_path) -> None:
-    app, _ = _app(tmp_path)
-    with TestClient(app) as client:
+    with TestClient(_app(tmp_path)) as client:
         r = client.post("/api/jobs", json={"kind": "train", "mode": "peer"})
         assert r.status_code == 422 and "mode" in r.json()["detail"]
         r = client.post(
@@ -101,8 +88,8 @@ def test_bad_job_requests_are_refused_with_a_reason(tmp_path) -> None:
 
 @pytest.mark.slow
 def test_a_running_job_can_be_cancelled(tmp_path) -> None:
-    app, jobs = _app(tmp_path)
-    with TestClient(app) as client:
+    with TestClient(_app(tmp_path)) as client:
+        jobs = client.app.state.jobs
         job_id = client.post(
             "/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}, timeout=30
         ).json()["id"]
@@ -113,35 +100,9 @@ def test_a_running_job_can_be_cancelled(tmp_path) -> None:
         assert client.post(f"/api/jobs/{job_id}/cancel").status_code == 409
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.slow
 def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_marked(tmp_path) -> None:
-    port = _free_port()
-    env = {**os.environ, "JOBS_RUN_DIR": str(tmp_path / "runs"), "JOBS_MODELS_DIR": str(tmp_path / "models")}
-    server = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uvicorn",
-            "--factory",
-            "jobs_app:create",
-            "--app-dir",
-            str(HERE),
-            "--port",
-            str(port),
-            "--log-level",
-            "warning",
-        ],
-        env=env,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        _wait(lambda: _up(base), 60)
+    with serve_jobs_app(tmp_path) as (base, server):
         done_id = httpx.post(
             f"{base}/api/jobs",
             json={"kind": "train", "mode": "faithful", "name": "kept", "overrides": TINY},
@@ -152,35 +113,20 @@ def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_mar
             f"{base}/api/jobs", json={"kind": "train", "mode": "faithful", "overrides": ENDLESS}, timeout=30
         ).json()["id"]
         _wait(lambda: httpx.get(f"{base}/api/jobs/{live_id}", timeout=30).json()["status"] == "running", 60)
-    finally:
         server.send_signal(signal.SIGKILL)
         server.wait()
-    restarted = JobManager(tmp_path / "runs", tmp_path / "models", data_loader="tiny_data:tiny_sequence_set")
+    restarted = JobManager(jobs_settings(tmp_path))
     status = {j["id"]: j["status"] for j in restarted.list()}
     assert status == {done_id: "done", live_id: "interrupted"}
     assert (tmp_path / "models" / "kept" / "meta.json").is_file()
     assert restarted.get(done_id)["result"]["model"] == "kept"
 
 
-def _up(base: str) -> bool:
-    try:
-        return httpx.get(f"{base}/api/jobs", timeout=1).status_code == 200
-    except httpx.HTTPError:
-        return False
-
-
 @pytest.mark.slow
-def test_a_trained_model_joins_the_apps_registry_and_can_be_served(tmp_path, monkeypatch) -> None:
+def test_a_trained_model_joins_the_apps_registry_and_can_be_served(tmp_path) -> None:
     """With the whole app: the finished job's model is listed by /api/models and selectable there."""
-    import dataclasses
-
-    from explorer_artefacts import build_artefacts
-
-    from server.app import create_app
-
-    settings = dataclasses.replace(build_artefacts(tmp_path / "artefacts"), viser=False)
-    monkeypatch.setenv("MTRNN_RUN_DIR", str(tmp_path / "runs"))
-    with TestClient(create_app(settings)) as client:
+    settings = explorer(tmp_path / "artefacts", run_dir=tmp_path / "runs")
+    with TestClient(build_app(settings)) as client:
         r = client.post(
             "/api/jobs", json={"kind": "train", "mode": "faithful", "name": "fresh", "overrides": TINY}
         )

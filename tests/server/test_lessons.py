@@ -1,9 +1,10 @@
-"""The lessons' REST endpoints (server/routes/lessons.py over server/lessons.py), on the synthetic
+"""The lessons' REST endpoints (server/routes/lessons.py over server/lessons/), on the synthetic
 world of `lesson_world` (64 scenes x 2 teachers, two untrained Table-1 models): every lesson answers
 with numbers computed from the model and data, and every bad parameter gets a 4xx with a message."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 import time
@@ -17,15 +18,18 @@ from fastapi.testclient import TestClient
 
 from data.scenario import Scene
 from model.experiments.runstore import RunSpec, RunStore
-from server.app import create_app
-from tests.server.lesson_world import build, make_state_factory, render
+from server.deps import get_settings
+from tests.app_builder import build_app, lesson_world
+from tests.server.lesson_world import render
 
 
 @pytest.fixture(scope="module")
 def client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TestClient]:
-    settings = build(tmp_path_factory.mktemp("world"))
-    app = create_app(settings, make_state_factory(settings))
-    with TestClient(app) as c:
+    # a short live cosine run keeps the tests fast
+    settings, load_world = lesson_world(
+        tmp_path_factory.mktemp("world"), cosine_epochs=40, cosine_snapshot_every=5
+    )
+    with TestClient(build_app(settings, load_world)) as c:
         yield c
 
 
@@ -209,6 +213,12 @@ def test_feeling_rejects_unknown_actions_and_colours(client: TestClient, params:
 # --- 5. abstracting
 
 
+def use_run_dir(client: TestClient, run_dir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Point the app's run store (settings.run_dir) elsewhere for one test."""
+    settings = dataclasses.replace(client.app.state.settings, run_dir=run_dir)
+    monkeypatch.setitem(client.app.dependency_overrides, get_settings, lambda: settings)
+
+
 def _wait(client: TestClient, run_id: str, timeout: float = 60.0) -> dict:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -220,8 +230,6 @@ def _wait(client: TestClient, run_id: str, timeout: float = 60.0) -> dict:
 
 
 def test_a_live_cosine_run_streams_moving_csc_points_and_final_measures(client: TestClient) -> None:
-    client.app.state.lessons.cosine.max_epochs = 40  # a short run keeps the test fast
-    client.app.state.lessons.cosine.snapshot_every = 5
     r = client.post("/api/lessons/abstracting/runs", json={"psi": 5e-5, "seed": 3})
     assert r.status_code == 202
     first = r.json()
@@ -259,7 +267,7 @@ def test_an_unknown_cosine_run_is_404(client: TestClient) -> None:
 def test_the_sweep_says_it_is_not_there_without_a_run_store(
     client: TestClient, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setenv("MTRNN_RUN_DIR", str(tmp_path / "empty"))
+    use_run_dir(client, tmp_path / "empty", monkeypatch)
     body = client.get("/api/lessons/abstracting/sweep").json()
     assert body["available"] is False and "no run store" in body["reason"]
     assert not (tmp_path / "empty").exists()  # asking never creates a store
@@ -274,7 +282,7 @@ def test_the_sweep_tabulates_a_stored_psi_s_sweep(
             spec = RunSpec("psi_s", "faithful", 0, init, init, {}, {"psi_s": psi})
             store.register([spec])
             store.finish(spec.key, {"mixed": {"f1": f1}}, 1.0)
-    monkeypatch.setenv("MTRNN_RUN_DIR", str(tmp_path))
+    use_run_dir(client, tmp_path, monkeypatch)
     body = client.get("/api/lessons/abstracting/sweep").json()
     assert body["available"] is True
     assert [row["psi_s"] for row in body["psi_s"]] == [1e-4, 5e-4]

@@ -2,30 +2,21 @@
 
 The app serves the shipped corpus and model when both exist (so the screenshots in docs/ show
 the real thing; MTRNN_MODELS_DIR and MTRNN_CORPUS can point at others), else the test artefacts
-of tests/server/. Chromium is never downloaded: the
+of tests/server/ (`tests.app_builder.explorer`). Chromium is never downloaded: the
 tests use /usr/bin/chromium (`scripts/ensure-chromium` installs it) and skip without it.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import sys
-import threading
-import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
-import httpx
 import pytest
-import uvicorn
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "server"))
-from explorer_artefacts import build_artefacts  # noqa: E402
-
-from data.corpus import DEFAULT_PATH  # noqa: E402
-from server.app import create_app  # noqa: E402
-from server.settings import Settings  # noqa: E402
-from server.viewer import free_port  # noqa: E402
+from data.corpus import DEFAULT_PATH
+from server.settings import Settings
+from tests.app_builder import build_app, explorer, serve_in_thread
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = [
@@ -44,29 +35,13 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Settings:
     corpus = shipped.corpus_path or DEFAULT_PATH
     if corpus.is_file() and (shipped.models_dir / shipped.model / "meta.json").is_file():
         return dataclasses.replace(shipped, corpus_path=corpus)
-    return build_artefacts(tmp_path_factory.mktemp("explorer-web"))
+    return explorer(tmp_path_factory.mktemp("explorer-web"))
 
 
 @pytest.fixture(scope="session")
 def base_url(served: Settings) -> Iterator[str]:
-    port = free_port()
-    app = create_app(dataclasses.replace(served, viser=True, port=port))
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    url = f"http://127.0.0.1:{port}"
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        try:
-            if httpx.get(f"{url}/api/health", timeout=2).status_code == 200:
-                break
-        except httpx.HTTPError:
-            time.sleep(0.2)
-    else:
-        pytest.fail("the explorer did not start within 60 s")
-    yield url
-    server.should_exit = True
-    thread.join(timeout=10)
+    with serve_in_thread(build_app(dataclasses.replace(served, viser=True))) as url:
+        yield url
 
 
 @pytest.fixture(scope="session")
@@ -82,12 +57,26 @@ def browser() -> Iterator[object]:
 
 
 @pytest.fixture()
-def page(browser, base_url: str) -> Iterator[object]:  # noqa: ANN001 - playwright Browser
-    context = browser.new_context(viewport={"width": 1400, "height": 1000}, base_url=base_url)
-    pg = context.new_page()
-    pg.set_default_timeout(60_000)
-    errors: list[str] = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.errors = errors  # type: ignore[attr-defined]
-    yield pg
-    context.close()
+def open_page(browser) -> Iterator[Callable[..., object]]:  # noqa: ANN001 - playwright Browser
+    """`open_page(base_url, timeout_ms=60_000)`: a fresh 1400x1000 page that records its JS errors
+    in `page.errors`; closed after the test."""
+    contexts = []
+
+    def open_(base_url: str, timeout_ms: int = 60_000) -> object:
+        context = browser.new_context(viewport={"width": 1400, "height": 1000}, base_url=base_url)
+        contexts.append(context)
+        pg = context.new_page()
+        pg.set_default_timeout(timeout_ms)
+        errors: list[str] = []
+        pg.on("pageerror", lambda e: errors.append(str(e)))
+        pg.errors = errors  # type: ignore[attr-defined]
+        return pg
+
+    yield open_
+    for context in contexts:
+        context.close()
+
+
+@pytest.fixture()
+def page(open_page: Callable[..., object], base_url: str) -> object:
+    return open_page(base_url)

@@ -11,32 +11,24 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import socket
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import cv2
+import httpx
 import pytest
-import uvicorn
 
 from data.corpus import DEFAULT_PATH
 from data.scenario import Scene
 from model.experiments.runstore import RunSpec, RunStore
-from server.app import create_app
 from server.settings import Settings
-from tests.server.lesson_world import build, make_state_factory, render
+from tests.app_builder import build_app, lesson_world, serve_in_thread
+from tests.server.lesson_world import render
 
 pytestmark = pytest.mark.browser
 playwright = pytest.importorskip("playwright.sync_api")
 SHOTS = os.environ.get("MTRNN_LESSON_SCREENSHOTS")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
@@ -48,38 +40,17 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, bool
         return
     shipped = Settings.from_env(viser=True)
     corpus = shipped.corpus_path or DEFAULT_PATH
-    if corpus.is_file() and (shipped.models_dir / shipped.model / "meta.json").is_file():
-        # the shipped corpus and models: the screenshots show them
-        settings, make_state, synthetic = dataclasses.replace(shipped, corpus_path=corpus), None, False
-    else:
-        settings = dataclasses.replace(build(tmp_path_factory.mktemp("world")), viser=True)
-        make_state, synthetic = make_state_factory(settings), True
-    previous_run_dir = os.environ.get("MTRNN_RUN_DIR")
-    if synthetic:  # a stored sweep to show; on the shipped models the real run store is shown
-        os.environ["MTRNN_RUN_DIR"] = str(_stored_sweeps(tmp_path_factory.mktemp("runs")))
-    app = create_app(settings, make_state)
-    port = _free_port()
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 60
-    while not server.started:
-        if time.monotonic() > deadline:
-            raise RuntimeError("the app did not start")
-        time.sleep(0.1)
-    # create the lessons' store; on the synthetic world keep the live cosine run short
-    import httpx
-
-    httpx.get(f"http://127.0.0.1:{port}/api/lessons", timeout=60)
-    if synthetic:
-        app.state.lessons.cosine.max_epochs = 60
-    yield f"http://127.0.0.1:{port}", synthetic
-    server.should_exit = True
-    thread.join(timeout=10)
-    if previous_run_dir is None:
-        os.environ.pop("MTRNN_RUN_DIR", None)
-    else:
-        os.environ["MTRNN_RUN_DIR"] = previous_run_dir
+    synthetic = not (corpus.is_file() and (shipped.models_dir / shipped.model / "meta.json").is_file())
+    if synthetic:  # a stored sweep to show, and a short live cosine run
+        runs = _stored_sweeps(tmp_path_factory.mktemp("runs"))
+        app = build_app(
+            *lesson_world(tmp_path_factory.mktemp("world"), viser=True, run_dir=runs, cosine_epochs=60)
+        )
+    else:  # the shipped corpus and models (the screenshots show them) and the real run store
+        app = build_app(dataclasses.replace(shipped, corpus_path=corpus))
+    with serve_in_thread(app) as url:
+        httpx.get(f"{url}/api/lessons", timeout=60)  # the lessons' survey of the corpus
+        yield url, synthetic
 
 
 def _stored_sweeps(run_dir: Path) -> Path:
@@ -118,9 +89,16 @@ def page(browser, base_url: str) -> Iterator:  # noqa: ANN001 - a Playwright bro
     assert not errors, errors
 
 
-def _open(page, lesson: str, query: str = "") -> None:  # noqa: ANN001
-    page.goto(f"{page.base}/lessons/#/lessons?lesson={lesson}{query}")
+def _open(  # noqa: ANN001
+    page, lesson: str, query: str = "", shown: str | None = None, plot: str | None = None
+) -> None:
+    """Open a lesson in the app and wait until it shows `shown` (a selector) and draws `plot` (an id)."""
+    page.goto(f"{page.base}/#/lessons?lesson={lesson}{query}")
     page.wait_for_selector(f"#lesson-{lesson}")
+    if shown:
+        page.wait_for_selector(shown)
+    if plot:
+        page.wait_for_function(f"() => document.getElementById('{plot}').data")
 
 
 def _changes(page, read: Callable[[], object], act: Callable[[], None], timeout: float = 30.0) -> object:  # noqa: ANN001
@@ -165,19 +143,19 @@ def _shot(page, lesson: str) -> None:  # noqa: ANN001
         page.screenshot(path=str(Path(SHOTS) / f"{lesson}.png"), full_page=True)
 
 
-def _reveal(page) -> None:  # noqa: ANN001
+def _reveal(page, lesson: str) -> None:  # noqa: ANN001
+    """Reveal the "try this" answer, check it reads well, and save the lesson's screenshot."""
     page.click("button.reveal")
     page.wait_for_selector(".try .answer:not([hidden])")
     assert len(page.inner_text(".try .answer")) > 80
     text = page.inner_text(".lesson")
     for broken in ("null", "undefined", "NaN", "[object"):
         assert broken not in text, f"{broken!r} shown on the page"
+    _shot(page, lesson)
 
 
 def test_timescales_tau_scene_and_the_shared_time_cursor(page) -> None:  # noqa: ANN001
-    _open(page, "timescales")
-    page.wait_for_selector("#half-life")
-    page.wait_for_function("() => document.getElementById('layer-Cs').data")
+    _open(page, "timescales", shown="#half-life", plot="layer-Cs")
     half = _changes(page, _text(page, "#half-life"), lambda: _slide(page, "#tau", 70))
     assert "48" in str(half)  # ln 0.5 / ln(1 - 1/70) = 48.2 steps, from the server
     assert "tau=70" in page.url
@@ -185,13 +163,11 @@ def test_timescales_tau_scene_and_the_shared_time_cursor(page) -> None:  # noqa:
     cursor = _plot(page, "layer-IO", "layout.shapes")
     _changes(page, cursor, lambda: _slide(page, "#time", 20))
     assert page.evaluate("() => document.getElementById('layer-Cf').layout.shapes[0].x0") == 20
-    _reveal(page)
-    _shot(page, "timescales")
+    _reveal(page, "timescales")
 
 
 def test_speaking_text_and_the_four_constants(page) -> None:  # noqa: ANN001
-    _open(page, "speaking")
-    page.wait_for_selector("#arpabet")
+    _open(page, "speaking", shown="#arpabet")
     _changes(page, _text(page, "#arpabet"), lambda: page.fill("#utterance", "the bookkeeper."))
     page.wait_for_function("() => document.getElementById('exact').textContent.includes('exact')")
     assert "✓" in page.inner_text("#exact")
@@ -207,13 +183,11 @@ def test_speaking_text_and_the_four_constants(page) -> None:  # noqa: ANN001
     assert "florbix" in page.inner_text("#speech-error")
     page.fill("#utterance", "slide the red apple.")
     page.wait_for_function("() => !document.querySelector('#speech-error .error')")
-    _reveal(page)
-    _shot(page, "speaking")
+    _reveal(page, "speaking")
 
 
 def test_seeing_frames_colour_window_and_an_upload(page, tmp_path: Path) -> None:  # noqa: ANN001
-    _open(page, "seeing")
-    page.wait_for_selector("#stages img")
+    _open(page, "seeing", shown="#stages img")
     _changes(page, _text(page, "#seeing-source"), lambda: _slide(page, "#frame", 5))
     assert "frame 5" in page.inner_text("#seeing-source")
     mean_shift = lambda: page.get_attribute("#stages img[data-stage=mean_shift]", "src")  # noqa: E731
@@ -227,14 +201,11 @@ def test_seeing_frames_colour_window_and_an_upload(page, tmp_path: Path) -> None
     assert "frame 0" in page.inner_text("#seeing-source")  # back to the corpus
     _slide(page, "#colour-radius", 24)
     page.wait_for_function("() => document.getElementById('radius-value').textContent === '24'")
-    _reveal(page)
-    _shot(page, "seeing")
+    _reveal(page, "seeing")
 
 
 def test_feeling_action_colour_and_the_cursor_shared_with_the_3d_arm(page) -> None:  # noqa: ANN001
-    _open(page, "feeling")
-    page.wait_for_selector("#touch-distances")
-    page.wait_for_function("() => document.getElementById('joint-plot').data")
+    _open(page, "feeling", shown="#touch-distances", plot="joint-plot")
     _changes(page, _plot(page, "joint-plot"), lambda: page.select_option("#action", "slide"))
     _changes(page, _plot(page, "joint-plot"), lambda: page.select_option("#colour", "blue"))
     assert "colour=blue" in page.url and "action=slide" in page.url
@@ -255,13 +226,11 @@ def test_feeling_action_colour_and_the_cursor_shared_with_the_3d_arm(page) -> No
             "() => fetch('/api/viewer').then((r) => r.json()).then((s) => Math.abs(s.t - 1.5) < 0.06)"
         )
         assert page.input_value("#time") == "1.5"
-    _reveal(page)
-    _shot(page, "feeling")
+    _reveal(page, "feeling")
 
 
 def test_abstracting_runs_the_cosine_experiment_live(page, served: tuple[str, bool]) -> None:  # noqa: ANN001
-    _open(page, "abstracting", "&psi=0.0002")
-    page.wait_for_selector("#sweep h2")
+    _open(page, "abstracting", "&psi=0.0002", shown="#sweep h2")
     _changes(page, _text(page, "#psi-value"), lambda: _slide(page, "#psi", 2))
     page.fill("#seed", "4")
     page.click("#run")
@@ -278,14 +247,11 @@ def test_abstracting_runs_the_cosine_experiment_live(page, served: tuple[str, bo
         assert f"metric={other}" in page.url
     elif served[1]:
         raise AssertionError("the stored sweep was not shown")
-    _reveal(page)
-    _shot(page, "abstracting")
+    _reveal(page, "abstracting")
 
 
 def test_associating_mute_and_colour_by(page) -> None:  # noqa: ANN001
-    _open(page, "associating")
-    page.wait_for_selector("#said-muted")
-    page.wait_for_function("() => document.getElementById('space-a').data")
+    _open(page, "associating", shown="#said-muted", plot="space-a")
     _changes(page, _plot(page, "space-a"), lambda: page.select_option("#mute", "vision"))
     page.wait_for_selector("#moved")
     # the distance the muted point moved is the server's (0 when the other sense alone picks the same words)
@@ -299,13 +265,11 @@ def test_associating_mute_and_colour_by(page) -> None:  # noqa: ANN001
     _changes(page, _plot(page, "space-v"), lambda: page.select_option("#colour-by", "colour"))
     _changes(page, _plot(page, "space-s"), lambda: page.select_option("#scene", index=9))
     assert "mute=proprioception" in page.url
-    _reveal(page)
-    _shot(page, "associating")
+    _reveal(page, "associating")
 
 
 def test_generalising_two_models_side_by_side(page) -> None:  # noqa: ANN001
-    _open(page, "generalising")
-    page.wait_for_selector("#summary-0 table")
+    _open(page, "generalising", shown="#summary-0 table")
     page.wait_for_selector("#summary-1 table")
     page.wait_for_function("() => document.getElementById('grid-1').data")
     options = page.eval_on_selector_all("#model-b option", "els => els.map((e) => e.value)")
@@ -325,13 +289,11 @@ def test_generalising_two_models_side_by_side(page) -> None:  # noqa: ANN001
     page.wait_for_function("(m) => document.getElementById('title-1').textContent.startsWith(m)", arg=current)
     page.click("#grid-0 .nsewdrag", position={"x": 30, "y": 30})
     page.wait_for_selector("#detail-0 li")
-    _reveal(page)
-    _shot(page, "generalising")
+    _reveal(page, "generalising")
 
 
 def test_hide_flags_remove_controls_and_survive_navigation(page) -> None:  # noqa: ANN001
-    _open(page, "timescales", "&hide=tau,time,answer")
-    page.wait_for_selector("#half-life")
+    _open(page, "timescales", "&hide=tau,time,answer", shown="#half-life")
     assert page.is_hidden("[data-control=tau]") and page.is_hidden("[data-control=time]")
     assert page.is_visible("[data-control=scene]") and page.is_hidden("button.reveal")
     page.click("nav.lesson-tabs a[data-lesson=speaking]")

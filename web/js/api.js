@@ -1,4 +1,5 @@
-// Talking to the server: JSON in, JSON out, and the server's own message on errors.
+// Talking to the server: JSON in, JSON out, and the server's own message on errors; query strings
+// and Server-Sent Event streams. Every page reaches the server through these functions.
 
 export class ApiError extends Error {
   constructor(status, message) {
@@ -13,13 +14,20 @@ async function unwrap(response) {
   try {
     const body = await response.json();
     if (typeof body.detail === "string") message = body.detail;
-    else if (Array.isArray(body.detail)) message = body.detail.map((d) => d.msg).join("; ");
+    else if (Array.isArray(body.detail)) message = body.detail.map((d) => d.msg).join("; "); // FastAPI's 422
   } catch (_) { /* not JSON */ }
   throw new ApiError(response.status, message);
 }
 
-export async function get(path) {
-  return unwrap(await fetch(path));
+// `path` with `params` as its query string (undefined and null values left out).
+export function withQuery(path, params) {
+  if (!params) return path;
+  const q = new URLSearchParams(Object.entries(params).filter(([, v]) => v !== undefined && v !== null)).toString();
+  return q ? `${path}?${q}` : path;
+}
+
+export async function get(path, params) {
+  return unwrap(await fetch(withQuery(path, params)));
 }
 
 export async function post(path, body) {
@@ -38,8 +46,17 @@ export async function put(path, body) {
   }));
 }
 
-export async function upload(path, field, file) {
+export async function upload(path, field, file, params) {
   const form = new FormData();
   form.append(field, file, file.name);
-  return unwrap(await fetch(path, { method: "POST", body: form }));
+  return unwrap(await fetch(withQuery(path, params), { method: "POST", body: form }));
+}
+
+// Server-Sent Events of `path`: `onEvent(JSON data)` for each event of the given types, and
+// `onClosed(source)` once the server has closed the stream. Returns the EventSource (close() it to stop).
+export function subscribe(path, types, onEvent, onClosed) {
+  const source = new EventSource(path);
+  for (const type of types) source.addEventListener(type, (ev) => onEvent(JSON.parse(ev.data)));
+  source.onerror = () => { if (source.readyState === EventSource.CLOSED) onClosed(source); };
+  return source;
 }

@@ -1,13 +1,15 @@
-// The app shell: a hash router and a navigation built from the page modules the server lists.
+// The app shell, the only router: a hash router and a navigation built from the page modules the
+// server lists.
 //
 // A page is a module in web/pages/ exporting
 //   meta = { route: "scenes", title: "Scenes", order: 10, nav: true }
 //   render(root, ctx) -> optional cleanup function
 // where ctx.params holds the URL's query (#/route/arg?key=value), ctx.arg the path argument,
-// and ctx.setParams({...}) rewrites the URL without re-rendering (views stay addressable).
+// ctx.setParams({...}) rewrites the URL without re-rendering (views stay addressable), and
+// ctx.modelsChanged() refreshes the header's model selector after a page changed the served model.
 // Adding a page is adding a file: GET /api/pages lists web/pages/*.js.
 
-import { get, put } from "./api.js";
+import { get, put, withQuery } from "./api.js";
 import { h, errorBox, help } from "./dom.js";
 
 const pages = new Map();
@@ -21,10 +23,10 @@ function parseHash() {
            params: Object.fromEntries(new URLSearchParams(query)) };
 }
 
+// The URL of a view: an empty parameter is one not set.
 function hashFor(route, arg, params) {
-  const query = new URLSearchParams(Object.entries(params).filter(([, v]) => v !== undefined && v !== null && v !== ""));
-  const q = query.toString();
-  return `#/${route}${arg ? "/" + encodeURIComponent(arg) : ""}${q ? "?" + q : ""}`;
+  const set = Object.fromEntries(Object.entries(params).filter(([, v]) => v !== ""));
+  return withQuery(`#/${route}${arg ? "/" + encodeURIComponent(arg) : ""}`, set);
 }
 
 async function loadPages() {
@@ -57,6 +59,7 @@ async function render() {
       Object.assign(params, update);
       history.replaceState(null, "", hashFor(route, arg, params));
     },
+    modelsChanged: modelSelector,
   };
   try {
     cleanup = (await page.render(root, ctx)) || null;

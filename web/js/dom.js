@@ -1,5 +1,7 @@
 // Small DOM helpers shared by the pages: element builder, "?" help buttons, badges.
 
+import { withQuery } from "./api.js";
+
 export function h(tag, attrs = {}, ...children) {
   const el = document.createElement(tag);
   for (const [key, value] of Object.entries(attrs || {})) {
@@ -32,7 +34,7 @@ export function help(text, term) {
     ev.stopPropagation();
     if (openPopover) openPopover.remove();
     const pop = h("div", { class: "popover", role: "dialog" }, h("p", {}, text),
-      term ? h("a", { href: `#/glossary?term=${encodeURIComponent(term)}` }, `Glossary: ${term}`) : null);
+      term ? h("a", { href: withQuery("#/glossary", { term }) }, `Glossary: ${term}`) : null);
     document.body.append(pop);
     const r = button.getBoundingClientRect();
     pop.style.left = `${Math.min(window.scrollX + r.left, window.scrollX + window.innerWidth - 340)}px`;
@@ -59,6 +61,16 @@ export function badge(split) {
 
 export function errorBox(message) {
   return h("div", { class: "error", role: "alert" }, message);
+}
+
+// The answer of `request`, or null once the server's message is shown at the end of `root`.
+export async function answerOrError(root, request) {
+  try {
+    return await request;
+  } catch (e) {
+    root.append(errorBox(e.message));
+    return null;
+  }
 }
 
 // Fixed decimals for ordinary numbers, significant digits for tiny ones (untrained Csc are ~1e-4).

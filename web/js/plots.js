@@ -1,9 +1,7 @@
-// Plotly helpers (Plotly.js is served by the app from the installed `plotly` package).
+// Plotly helpers (Plotly.js is served by the app from the installed `plotly` package); the colours
+// come from palette.js.
 
-export const ACTION_COLOURS = { pull: "#1f77b4", push: "#ff7f0e", "show me": "#2ca02c", slide: "#9467bd" };
-export const OBJECT_COLOURS = { blue: "#2858dc", green: "#28aa46", red: "#d22828", yellow: "#e6b800" };
-export const SHAPE_COLOURS = { apple: "#8c564b", banana: "#bcbd22", dice: "#17becf", phone: "#7f7f7f" };
-export const JOINT_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd"];
+import { CATEGORICAL, CURSOR, TRANSPARENT, WHITE } from "./palette.js";
 
 export function plotly() {
   return new Promise((resolve) => {
@@ -15,11 +13,13 @@ export function plotly() {
 
 export const CONFIG = { displaylogo: false, responsive: true, modeBarButtonsToRemove: ["select2d", "lasso2d"] };
 
+// Traces without a colour of their own take the palette's categorical colours in turn.
 export function baseLayout(extra = {}) {
   return {
     margin: { l: 50, r: 10, t: 30, b: 40 },
-    paper_bgcolor: "rgba(0,0,0,0)",
-    plot_bgcolor: "#fff",
+    paper_bgcolor: TRANSPARENT,
+    plot_bgcolor: WHITE,
+    colorway: CATEGORICAL,
     font: { family: "system-ui, sans-serif", size: 12 },
     ...extra,
   };
@@ -27,5 +27,17 @@ export function baseLayout(extra = {}) {
 
 // A vertical line at x (the shared time cursor) as a layout shape.
 export function cursorShape(x, yref = "paper") {
-  return { type: "line", x0: x, x1: x, y0: 0, y1: 1, yref, line: { color: "#e03030", width: 2 } };
+  return { type: "line", x0: x, x1: x, y0: 0, y1: 1, yref, line: { color: CURSOR, width: 2 } };
+}
+
+// One scatter trace per group of `keys` (points[i] belongs to keys[i]), in first-seen order.
+export function groupPoints(points, keys, text = null) {
+  const groups = new Map();
+  points.forEach((p, i) => {
+    const g = groups.get(keys[i]) || { x: [], y: [], text: [] };
+    g.x.push(p[0]); g.y.push(p[1]);
+    if (text) g.text.push(text(i));
+    groups.set(keys[i], g);
+  });
+  return groups;
 }

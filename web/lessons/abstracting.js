@@ -3,11 +3,19 @@
 
 import { get, post } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
+import { CATEGORICAL, TRANSPARENT } from "../js/palette.js";
 import { plotly, CONFIG, baseLayout } from "../js/plots.js";
-import { control, controls, equation, tryThis, slider, select, num, hiddenSet } from "./common.js";
+import { control, controls, tryThis, slider, select, num, hiddenSet } from "./common.js";
 
 const PSIS = [0, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2];
-const SEQ_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728"];
+const SEQ_COLOURS = CATEGORICAL.slice(0, 4); // the four phases
+
+export const intro = [
+  "How can a network find a concept for a sequence without being told what the concept is? The paper's MTRNN with context abstraction reads a sequence and ends with a pattern c_T in its slowest (Csc) units. Training pulls the network towards target patterns, but the targets themselves move too: a small share ψ of the error moves the targets, the rest (1 − ψ) trains the weights. This is self-organisation forcing.",
+  { equation: "∂E/∂z_T,i = (1 − ψ) (y_T,i − f(c_T,i + b_i)) f′(z_T,i)     c_T,i ← c_T,i − ψ ζ_i ∂E/∂c_T,i", tag: "eqs. (11)-(12)" },
+  "The test of 3.2.2: four sequences of two contrary cosines (33 steps) that differ only in phase; two Csc units, so the four concepts are points in a plane. Run it for a ψ: filled dots are the network's abstraction of each sequence (its Csc internal states at the last step), rings are the moving targets c_T (the network is pulled towards c_T plus its bias b, so dots settle near, not on, the rings). How well spread they end up is measured by d_avg (mean distance) and d_rel (geometric mean of distance / d_avg: 1 when all distances are equal; four points in a plane can reach at most 0.986).",
+  { equation: "d_avg = mean over pairs of ‖c_k − c_l‖,     d_rel = ( Π_pairs ‖c_k − c_l‖ / d_avg )^(1 / #pairs)", tag: "eqs. (13)-(15)" },
+];
 
 export async function render(root, ctx) {
   const Plotly = await plotly();
@@ -30,11 +38,6 @@ export async function render(root, ctx) {
   const done = [];
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "How can a network find a concept for a sequence without being told what the concept is? The paper's MTRNN with context abstraction reads a sequence and ends with a pattern c_T in its slowest (Csc) units. Training pulls the network towards target patterns, but the targets themselves move too: a small share ψ of the error moves the targets, the rest (1 − ψ) trains the weights. This is self-organisation forcing."),
-      equation("∂E/∂z_T,i = (1 − ψ) (y_T,i − f(c_T,i + b_i)) f′(z_T,i)     c_T,i ← c_T,i − ψ ζ_i ∂E/∂c_T,i", "eqs. (11)-(12)"),
-      h("p", {}, "The test of 3.2.2: four sequences of two contrary cosines (33 steps) that differ only in phase; two Csc units, so the four concepts are points in a plane. Run it for a ψ: filled dots are the network's abstraction of each sequence (its Csc internal states at the last step), rings are the moving targets c_T (the network is pulled towards c_T plus its bias b, so dots settle near, not on, the rings). How well spread they end up is measured by d_avg (mean distance) and d_rel (geometric mean of distance / d_avg: 1 when all distances are equal; four points in a plane can reach at most 0.986)."),
-      equation("d_avg = mean over pairs of ‖c_k − c_l‖,     d_rel = ( Π_pairs ‖c_k − c_l‖ / d_avg )^(1 / #pairs)", "eqs. (13)-(15)")),
     controls(
       control(ctx, "psi", "ψ", psi, "Self-organisation forcing: the share of the error that moves the targets c_T. The paper finds 5e-5 best for this task.", "psi"), psiValue,
       control(ctx, "seed", "seed", seed, "Initialisation of the network and the random starting targets (same seed, same start).", null),
@@ -68,7 +71,7 @@ export async function render(root, ctx) {
       x: frames.map((f) => f.points[k][0]), y: frames.map((f) => f.points[k][1]), mode: "lines", showlegend: false,
       line: { color: SEQ_COLOURS[k], width: 1 }, opacity: 0.5, hoverinfo: "skip" }));
     const targets = { x: last.targets.map((p) => p[0]), y: last.targets.map((p) => p[1]), mode: "markers", name: "targets c_T (the net aims at c_T + b, eq. 11)",
-      marker: { size: 16, color: "rgba(0,0,0,0)", line: { width: 2, color: SEQ_COLOURS } } };
+      marker: { size: 16, color: TRANSPARENT, line: { width: 2, color: SEQ_COLOURS } } };
     const points = { x: last.points.map((p) => p[0]), y: last.points.map((p) => p[1]), mode: "markers+text", name: "abstracted c_T",
       text: ["phase 0", "phase π/2", "phase π", "phase 3π/2"], textposition: "top center",
       marker: { size: 11, color: SEQ_COLOURS } };
@@ -93,7 +96,7 @@ export async function render(root, ctx) {
     let frames = [];
     const tick = async () => {
       try {
-        const s = await get(`/api/lessons/abstracting/runs/${job.id}?since=${frames.length}`);
+        const s = await get(`/api/lessons/abstracting/runs/${job.id}`, { since: frames.length });
         frames = frames.concat(s.frames);
         bar.style.width = `${Math.round(100 * s.progress)}%`;
         status.textContent = s.status === "done" ? `done in ${num(s.seconds, 1)} s` : s.status === "failed" ? `failed: ${s.error}` : `${s.status}… epoch ${s.epoch} (${num(s.seconds, 1)} s)`;

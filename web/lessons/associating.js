@@ -3,17 +3,21 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
-import { plotly, CONFIG, baseLayout, ACTION_COLOURS, OBJECT_COLOURS, SHAPE_COLOURS } from "../js/plots.js";
-import { control, controls, equation, tryThis, latest, select, num, sceneOptions } from "./common.js";
+import { BY, CURSOR, HIGHLIGHT, WHITE } from "../js/palette.js";
+import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { control, controls, tryThis, latest, select, num, sceneSelect } from "./common.js";
 
-const PALETTE = { action: ACTION_COLOURS, colour: OBJECT_COLOURS, shape: SHAPE_COLOURS };
 const TITLES = { s: "somatosensory c_s,T (touch)", v: "visual c_v,T (sight)", a: "auditory c_a,0 (cell assemblies → speech)" };
+
+export const intro = [
+  "Each sense abstracts a recording into its own context: MTRNN_s into c_s,T (12 numbers), MTRNN_v into c_v,T. The cell assemblies, one layer of dense associations, map the two onto the auditory context c_a,0 that starts the utterance. Below, every corpus recording is a dot in each of the three spaces (first two principal components, Fig. 10); the star is the recording you picked. Colour the dots by action, colour or shape and see which space separates what.",
+  { equation: "c_a,0,i = z_i = Σ_j w_ij f(c_s,T,j) + Σ_k w_ik f(c_v,T,k) + b_i", tag: "eq. (17)" },
+  "Mute a sense: its context is replaced by its mean over the corpus, so the assemblies get nothing specific from it. The diamond shows where c_a,0 lands then, and the model says what it makes of the remaining sense.",
+];
 
 export async function render(root, ctx, index) {
   const Plotly = await plotly();
-  const scenes = sceneOptions(index);
-  const sceneId = ctx.params.scene && scenes.some(([id]) => id === ctx.params.scene) ? ctx.params.scene : scenes[0][0];
-  const scene = select("scene", scenes, sceneId);
+  const scene = sceneSelect(ctx, index);
   const mute = select("mute", [["none", "nothing"], ["vision", "vision"], ["proprioception", "proprioception"]], ctx.params.mute || "none");
   const colourBy = select("colour-by", ["action", "colour", "shape"], ctx.params.by || "action");
   const said = h("div", { class: "utterances", id: "assoc-said" });
@@ -22,10 +26,6 @@ export async function render(root, ctx, index) {
   let data = null;
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "Each sense abstracts a recording into its own context: MTRNN_s into c_s,T (12 numbers), MTRNN_v into c_v,T. The cell assemblies, one layer of dense associations, map the two onto the auditory context c_a,0 that starts the utterance. Below, every corpus recording is a dot in each of the three spaces (first two principal components, Fig. 10); the star is the recording you picked. Colour the dots by action, colour or shape and see which space separates what."),
-      equation("c_a,0,i = z_i = Σ_j w_ij f(c_s,T,j) + Σ_k w_ik f(c_v,T,k) + b_i", "eq. (17)"),
-      h("p", {}, "Mute a sense: its context is replaced by its mean over the corpus, so the assemblies get nothing specific from it. The diamond shows where c_a,0 lands then, and the model says what it makes of the remaining sense.")),
     controls(
       control(ctx, "scene", "scene", scene, "The recording to follow through the three spaces.", "Csc"),
       control(ctx, "mute", "mute", mute, "Silence one sense: replace its Csc pattern by the corpus mean before the cell assemblies.", "cell assembly"),
@@ -44,7 +44,7 @@ export async function render(root, ctx, index) {
 
   function draw() {
     const by = colourBy.value;
-    const palette = PALETTE[by];
+    const palette = BY[by];
     const groups = [...new Set(data.labels.map((l) => l[by]))];
     ["s", "v", "a"].forEach((space, k) => {
       const sp = data.spaces[space];
@@ -56,10 +56,10 @@ export async function render(root, ctx, index) {
           marker: { size: 7, color: palette[g], opacity: 0.75, symbol: idx.map((i) => (data.labels[i].split === "test" ? "circle-open" : "circle")) } };
       });
       traces.push({ x: [sp.x[data.index]], y: [sp.y[data.index]], mode: "markers", name: "picked", showlegend: k === 0,
-        marker: { size: 18, symbol: "star", color: "#111", line: { color: "#fff", width: 1 } }, hoverinfo: "skip" });
+        marker: { size: 18, symbol: "star", color: HIGHLIGHT, line: { color: WHITE, width: 1 } }, hoverinfo: "skip" });
       if (space === "a" && data.mute !== "none") {
         traces.push({ x: [sp.x[data.index], data.point_a[0]], y: [sp.y[data.index], data.point_a[1]], mode: "lines+markers", name: `${data.mute} muted`,
-          marker: { size: [0, 15], symbol: "diamond", color: "#e03030" }, line: { color: "#e03030", dash: "dot" }, showlegend: true });
+          marker: { size: [0, 15], symbol: "diamond", color: CURSOR }, line: { color: CURSOR, dash: "dot" }, showlegend: true });
       }
       Plotly.react(plots[k], traces, baseLayout({
         title: { text: `${TITLES[space]}`, font: { size: 13 } },
@@ -87,7 +87,7 @@ export async function render(root, ctx, index) {
   const load = latest(async () => {
     ctx.setParams({ scene: scene.value, mute: mute.value, by: colourBy.value });
     try {
-      data = await get(`/api/lessons/associating?${new URLSearchParams({ scene: scene.value, mute: mute.value })}`);
+      data = await get("/api/lessons/associating", { scene: scene.value, mute: mute.value });
       error.replaceChildren();
     } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
     showSaid();

@@ -1,5 +1,5 @@
-// Shared pieces of the lessons: hideable controls (?hide=a,b), "try this" boxes, equations,
-// debounced live requests. Every lesson keeps its state in the URL through ctx.setParams.
+// Shared pieces of the lessons: their text and equations, hideable controls (?hide=a,b), "try this"
+// boxes, debounced live requests. Every lesson keeps its state in the URL through ctx.setParams.
 
 import { h, help } from "../js/dom.js";
 
@@ -20,8 +20,14 @@ export function controls(...items) {
   return h("div", { class: "controls" }, ...items);
 }
 
-export function equation(text, tag) {
+function equation(text, tag) {
   return h("div", { class: "eq" }, tag ? h("span", { class: "tag" }, tag) : null, text);
+}
+
+// A lesson's text: strings are paragraphs, { equation, tag } an equation with its number.
+export function prose(items) {
+  return h("div", { class: "lesson-text" },
+    items.map((x) => (typeof x === "string" ? h("p", {}, x) : equation(x.equation, x.tag))));
 }
 
 // "Try this": the question, and the answer (built when asked, from the live numbers) on demand;
@@ -78,6 +84,8 @@ export function num(x, digits = 3) {
   return v.toFixed(digits);
 }
 
-export function sceneOptions(index) {
-  return index.scenes.map((s) => [s.id, `${s.utterance} (${s.split})`]);
+// The corpus recordings to pick from (#scene): the URL's ?scene= if it is one, else the first.
+export function sceneSelect(ctx, index) {
+  const scenes = index.scenes.map((s) => [s.id, `${s.utterance} (${s.split})`]);
+  return select("scene", scenes, scenes.some(([id]) => id === ctx.params.scene) ? ctx.params.scene : scenes[0][0]);
 }

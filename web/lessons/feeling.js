@@ -4,16 +4,19 @@
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { Cursor } from "../js/cursor.js";
-import { plotly, CONFIG, baseLayout, cursorShape, SHAPE_COLOURS } from "../js/plots.js";
+import { ACTIONS, OBJECT_COLOURS, SHAPE_COLOURS } from "../js/palette.js";
+import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
 import { control, controls, tryThis, latest, slider, select, num } from "./common.js";
 
-const ACTIONS = ["pull", "push", "show me", "slide"];
-const COLOURS = ["blue", "green", "red", "yellow"];
+export const intro = [
+  "Proprioception is the body's sense of itself: here the five joint angles of the NAO's right arm, 20 times a second, scaled to [0, 1] by the joint limits. It is what MTRNN_s reads. Pick an action and a colour: the plot overlays the same action on the four shapes. The 3D arm replays one of them; the red line is one time cursor shared with it.",
+  "All the objects have about the same mass and friction (paper 4.1), so the arm moves much the same whatever it is moving. The table below measures it: how different the joint trajectories are, and how far apart the model's abstracted contexts c_s,T (touch) and c_v,T (vision) land.",
+];
 
 export async function render(root, ctx) {
   const Plotly = await plotly();
   const action = select("action", ACTIONS, ACTIONS.includes(ctx.params.action) ? ctx.params.action : "push");
-  const colour = select("colour", COLOURS, COLOURS.includes(ctx.params.colour) ? ctx.params.colour : "red");
+  const colour = select("colour", OBJECT_COLOURS, OBJECT_COLOURS.includes(ctx.params.colour) ? ctx.params.colour : "red");
   const shown = select("shown", [], "");
   const time = slider("time", 0, 1, 0.05, Number(ctx.params.t || 0));
   const timeValue = h("span", { class: "value time", id: "time-value" }, "0.00 s");
@@ -29,9 +32,6 @@ export async function render(root, ctx) {
   let cursor = null;
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "Proprioception is the body's sense of itself: here the five joint angles of the NAO's right arm, 20 times a second, scaled to [0, 1] by the joint limits. It is what MTRNN_s reads. Pick an action and a colour: the plot overlays the same action on the four shapes. The 3D arm replays one of them; the red line is one time cursor shared with it."),
-      h("p", {}, "All the objects have about the same mass and friction (paper 4.1), so the arm moves much the same whatever it is moving. The table below measures it: how different the joint trajectories are, and how far apart the model's abstracted contexts c_s,T (touch) and c_v,T (vision) land.")),
     controls(
       control(ctx, "action", "action", action, "The manipulation the teacher guided the arm through (Fig. 5b).", "proprioception"),
       control(ctx, "colour", "colour", colour, "The colour of the four objects overlaid.", null),
@@ -104,7 +104,7 @@ export async function render(root, ctx) {
   const load = latest(async () => {
     ctx.setParams({ action: action.value, colour: colour.value });
     try {
-      data = await get(`/api/lessons/feeling?${new URLSearchParams({ action: action.value, colour: colour.value })}`);
+      data = await get("/api/lessons/feeling", { action: action.value, colour: colour.value });
       error.replaceChildren();
     } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
     const wanted = ctx.params.shown && data.series.some((s) => s.id === ctx.params.shown) ? ctx.params.shown : data.series[0].id;

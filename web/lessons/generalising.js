@@ -3,8 +3,14 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
+import { EXACT_SCALE, SPLIT_COLOURS } from "../js/palette.js";
 import { plotly, CONFIG, baseLayout } from "../js/plots.js";
 import { control, controls, tryThis, select, num } from "./common.js";
+
+export const intro = [
+  "The model is trained on half of the 64 scenes (all four recordings of a scene on the same side) and asked to describe the other half: actions, colours and shapes it knows, in combinations it has never met. The paper reports an F1 of 0.98 on training and 0.64 on novel scenes for its best network, with mostly single-phoneme errors.",
+  "Each grid shows, for every action (rows) and object (columns), the share of the scene's recordings the model describes exactly; boxed cells (T) are training scenes. Click a cell to read what was said. The tables split novel scenes by whether their object (colour + shape) was ever seen in training: a new pairing of known parts is what the cell assemblies must compose.",
+];
 
 export async function render(root, ctx, index) {
   const Plotly = await plotly();
@@ -24,9 +30,6 @@ export async function render(root, ctx, index) {
   const results = [null, null];
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "The model is trained on half of the 64 scenes (all four recordings of a scene on the same side) and asked to describe the other half: actions, colours and shapes it knows, in combinations it has never met. The paper reports an F1 of 0.98 on training and 0.64 on novel scenes for its best network, with mostly single-phoneme errors."),
-      h("p", {}, "Each grid shows, for every action (rows) and object (columns), the share of the scene's recordings the model describes exactly; boxed cells (T) are training scenes. Click a cell to read what was said. The tables split novel scenes by whether their object (colour + shape) was ever seen in training: a new pairing of known parts is what the cell assemblies must compose.")),
     controls(
       control(ctx, "a", "left model", pickers[0], "A model the app serves (its checkpoint's mode in brackets below).", "split"),
       control(ctx, "b", "right model", pickers[1], "Another model to compare, e.g. end-to-end training against the paper's faithful staged recipe.", "split")),
@@ -67,10 +70,10 @@ export async function render(root, ctx, index) {
     });
     const shapes = r.scenes.filter((s) => s.split === "train").map((s) => {
       const i = r.actions.indexOf(s.action), j = r.objects.indexOf(`${s.colour} ${s.shape}`);
-      return { type: "rect", x0: j - 0.5, x1: j + 0.5, y0: i - 0.5, y1: i + 0.5, line: { color: "#1e40af", width: 2 } };
+      return { type: "rect", x0: j - 0.5, x1: j + 0.5, y0: i - 0.5, y1: i + 0.5, line: { color: SPLIT_COLOURS.train, width: 2 } };
     });
     Plotly.react(c.grid, [{ z, x: r.objects, y: r.actions, text, texttemplate: "%{text}", type: "heatmap", zmin: 0, zmax: 1,
-      colorscale: [[0, "#c0392b"], [0.5, "#f1c40f"], [1, "#1a7f37"]], hovertemplate: "%{y} the %{x}: %{z:.0%} exact<extra></extra>" }],
+      colorscale: EXACT_SCALE, hovertemplate: "%{y} the %{x}: %{z:.0%} exact<extra></extra>" }],
     baseLayout({ xaxis: { tickangle: -45, tickfont: { size: 10 } }, yaxis: { autorange: "reversed" }, shapes, margin: { l: 75, r: 10, t: 10, b: 90 } }), CONFIG);
     c.grid.removeAllListeners?.("plotly_click");
     c.grid.on("plotly_click", (ev) => {
@@ -86,7 +89,7 @@ export async function render(root, ctx, index) {
     ctx.setParams({ a: pickers[0].value, b: pickers[1].value });
     columns[k].summary.replaceChildren(h("p", { class: "muted" }, "describing every recording…"));
     try {
-      results[k] = await get(`/api/lessons/generalising?model=${encodeURIComponent(pickers[k].value)}`);
+      results[k] = await get("/api/lessons/generalising", { model: pickers[k].value });
       error.replaceChildren();
     } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
     draw(k);

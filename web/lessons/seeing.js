@@ -3,14 +3,18 @@
 
 import { get, upload } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
+import { ACCENT, COLOUR_COLOURS, NEUTRAL } from "../js/palette.js";
 import { plotly, CONFIG, baseLayout } from "../js/plots.js";
-import { control, controls, tryThis, latest, slider, select, num, sceneOptions } from "./common.js";
+import { control, controls, tryThis, latest, slider, num, sceneSelect } from "./common.js";
+
+export const intro = [
+  "The robot does not see pixels the way we do: its camera frame is reduced to 19 numbers. Mean shift (Comaniciu & Meer) flattens the picture into patches of similar colour; the most saturated sizeable patch is taken for the object (patches touching the border, where the arm enters, count for less); Canny edges cut it from its neighbours; the contour finder traces its outline. From the centre of mass, the largest distance to the contour in each of 16 sectors of 22.5° describes the shape (scaled by the square root of the area, largest first: invariant to size and roughly to rotation), and the mean R, G, B inside it the colour. The centroid is kept apart.",
+  "Move through the frames of a recording, change the mean-shift colour window, or upload a picture of your own.",
+];
 
 export async function render(root, ctx, index) {
   const Plotly = await plotly();
-  const scenes = sceneOptions(index);
-  const sceneId = ctx.params.scene && scenes.some(([id]) => id === ctx.params.scene) ? ctx.params.scene : scenes[0][0];
-  const scene = select("scene", scenes, sceneId);
+  const scene = sceneSelect(ctx, index);
   const frame = slider("frame", 0, 400, 1, Number(ctx.params.frame || 0));
   const frameValue = h("span", { class: "value", id: "frame-value" }, frame.value);
   const radius = slider("colour-radius", 4, 64, 2, Number(ctx.params.radius || 24));
@@ -24,9 +28,6 @@ export async function render(root, ctx, index) {
   let uploaded = null;
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "The robot does not see pixels the way we do: its camera frame is reduced to 19 numbers. Mean shift (Comaniciu & Meer) flattens the picture into patches of similar colour; the most saturated sizeable patch is taken for the object (patches touching the border, where the arm enters, count for less); Canny edges cut it from its neighbours; the contour finder traces its outline. From the centre of mass, the largest distance to the contour in each of 16 sectors of 22.5° describes the shape (scaled by the square root of the area, largest first: invariant to size and roughly to rotation), and the mean R, G, B inside it the colour. The centroid is kept apart."),
-      h("p", {}, "Move through the frames of a recording, change the mean-shift colour window, or upload a picture of your own.")),
     controls(
       control(ctx, "scene", "recording", scene, "A corpus recording; its camera frames are re-rendered from their seed.", "vision features"),
       control(ctx, "frame", "frame", frame, "Which camera frame (20 per second).", null), frameValue,
@@ -53,7 +54,7 @@ export async function render(root, ctx, index) {
     const n = seen.feature_names.length;
     Plotly.react(bars, [{
       x: seen.feature_names, y: seen.features, type: "bar",
-      marker: { color: seen.feature_names.map((name, i) => (i < 16 ? "#3056a0" : i < 19 ? ["#d22828", "#28aa46", "#2858dc"][i - 16] : "#bbb")) },
+      marker: { color: seen.feature_names.map((name, i) => (i < 16 ? ACCENT : i < 19 ? COLOUR_COLOURS[["red", "green", "blue"][i - 16]] : NEUTRAL)) },
     }], baseLayout({ title: { text: `the ${seen.paper_features} features MTRNN_v reads (grey: centroid, kept apart)`, font: { size: 13 } },
       yaxis: { range: [0, 1] }, xaxis: { tickangle: -45, range: [-0.5, n - 0.5] }, margin: { l: 50, r: 10, t: 30, b: 75 } }), CONFIG);
   }
@@ -64,9 +65,9 @@ export async function render(root, ctx, index) {
     ctx.setParams({ scene: scene.value, frame: frame.value, radius: radius.value });
     try {
       if (uploaded) {
-        seen = await upload(`/api/lessons/seeing?colour_radius=${radius.value}`, "image", uploaded);
+        seen = await upload("/api/lessons/seeing", "image", uploaded, { colour_radius: radius.value });
       } else {
-        seen = await get(`/api/lessons/seeing?${new URLSearchParams({ scene: scene.value, frame: frame.value, colour_radius: radius.value })}`);
+        seen = await get("/api/lessons/seeing", { scene: scene.value, frame: frame.value, colour_radius: radius.value });
         frame.max = seen.frames - 1;
       }
       error.replaceChildren();

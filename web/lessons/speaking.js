@@ -4,7 +4,14 @@
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { plotly, CONFIG, baseLayout } from "../js/plots.js";
-import { control, controls, equation, tryThis, latest, slider, num } from "./common.js";
+import { control, controls, tryThis, latest, slider, num } from "./common.js";
+
+export const intro = [
+  "The robot speaks in phonemes, the sounds of the ARPAbet (from the CMU pronouncing dictionary), plus SIL for a pause and PER, EXM, QUM for the end of a sentence: the alphabet B, one output neuron each. A sentence becomes a train of spikes, one phoneme every ν steps after a head margin γ; each spike is a small Gaussian of width ω and sharpness σ² that primes its neighbours in time.",
+  { equation: "g(p_k, t_rel, i) = exp(−t_rel² / 2σ²)  if p_k = B_i,   t = γ + kν + t_rel,   t_rel ∈ [−ω/2, ω/2]", tag: "eqs. (18)-(19)" },
+  { equation: "y*_t,i = exp(λ·g_t,i) / Σ_j exp(λ·g_t,j),   λ = ln( 0.9/(1 − 0.9) · (|B| − 1) )", tag: "eqs. (20)-(21)" },
+  "Type a sentence (any words the CMU dictionary knows), move the four constants and watch both the spikes and the softmax activity that MTRNN_a learns to produce. The decoder reads the activity back: one phoneme per run of steps where the same neuron wins with activity ≥ 0.3.",
+];
 
 export async function render(root, ctx) {
   const Plotly = await plotly();
@@ -23,11 +30,6 @@ export async function render(root, ctx) {
   let speech = null;
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "The robot speaks in phonemes, the sounds of the ARPAbet (from the CMU pronouncing dictionary), plus SIL for a pause and PER, EXM, QUM for the end of a sentence: the alphabet B, one output neuron each. A sentence becomes a train of spikes, one phoneme every ν steps after a head margin γ; each spike is a small Gaussian of width ω and sharpness σ² that primes its neighbours in time."),
-      equation("g(p_k, t_rel, i) = exp(−t_rel² / 2σ²)  if p_k = B_i,   t = γ + kν + t_rel,   t_rel ∈ [−ω/2, ω/2]", "eqs. (18)-(19)"),
-      equation("y*_t,i = exp(λ·g_t,i) / Σ_j exp(λ·g_t,j),   λ = ln( 0.9/(1 − 0.9) · (|B| − 1) )", "eqs. (20)-(21)"),
-      h("p", {}, "Type a sentence (any words the CMU dictionary knows), move the four constants and watch both the spikes and the softmax activity that MTRNN_a learns to produce. The decoder reads the activity back: one phoneme per run of steps where the same neuron wins with activity ≥ 0.3.")),
     controls(
       control(ctx, "text", "sentence", text, "Words the CMU pronouncing dictionary knows; . ! ? end a sentence.", "phoneme"),
       control(ctx, "gamma", "γ", params.gamma, "Head margin: empty steps before the first phoneme slot.", null), values.gamma,
@@ -56,7 +58,7 @@ export async function render(root, ctx) {
     Object.entries(values).forEach(([k, el]) => { el.textContent = q[k]; });
     ctx.setParams({ text: text.value, ...q });
     try {
-      speech = await get(`/api/lessons/speaking?${new URLSearchParams({ text: text.value, ...q })}`);
+      speech = await get("/api/lessons/speaking", { text: text.value, ...q });
       error.replaceChildren();
     } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
     out.replaceChildren(

@@ -3,16 +3,21 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
+import { NEUTRAL, OKABE_ITO } from "../js/palette.js";
 import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
-import { control, controls, equation, tryThis, latest, slider, select, num, sceneOptions } from "./common.js";
+import { control, controls, prose, tryThis, latest, slider, num, sceneSelect } from "./common.js";
+
+export const intro = [
+  "Every neuron of an MTRNN is a leaky integrator: at each step its internal state z moves only a fraction 1/τ of the way towards its new input. A unit with a small timescale τ follows its input almost at once; a unit with a large τ changes slowly and remembers what happened long ago.",
+  { equation: "z_t,i = (1 − 1/τ_i) · z_t−1,i + (1/τ_i) · ( Σ_j w_ij x_t,j + b_i )", tag: "eq. (3)" },
+  "Below, one unit gets a pulse of input (10 steps of 1). Move τ and watch how fast it charges and how long it takes to forget. The faint curves are MTRNN_a's three layers (Table 1): IO τ = 2, Cf τ = 5, Cs τ = 70.",
+];
 
 export async function render(root, ctx, index) {
   const Plotly = await plotly();
   const tau = slider("tau", 1, 100, 1, Number(ctx.params.tau || 5));
   const tauValue = h("span", { class: "value", id: "tau-value" }, tau.value);
-  const scenes = sceneOptions(index);
-  const sceneId = ctx.params.scene && scenes.some(([id]) => id === ctx.params.scene) ? ctx.params.scene : scenes[0][0];
-  const scene = select("scene", scenes, sceneId);
+  const scene = sceneSelect(ctx, index);
   const time = slider("time", 0, 59, 1, Number(ctx.params.t || 0));
   const timeValue = h("span", { class: "value", id: "time-value" }, time.value);
   const phonemeNow = h("span", { class: "phoneme-now", id: "phoneme-now" }, "–");
@@ -26,14 +31,9 @@ export async function render(root, ctx, index) {
   let activity = null;
 
   root.append(
-    h("div", { class: "lesson-text" },
-      h("p", {}, "Every neuron of an MTRNN is a leaky integrator: at each step its internal state z moves only a fraction 1/τ of the way towards its new input. A unit with a small timescale τ follows its input almost at once; a unit with a large τ changes slowly and remembers what happened long ago."),
-      equation("z_t,i = (1 − 1/τ_i) · z_t−1,i + (1/τ_i) · ( Σ_j w_ij x_t,j + b_i )", "eq. (3)"),
-      h("p", {}, "Below, one unit gets a pulse of input (10 steps of 1). Move τ and watch how fast it charges and how long it takes to forget. The faint curves are MTRNN_a's three layers (Table 1): IO τ = 2, Cf τ = 5, Cs τ = 70.")),
     controls(control(ctx, "tau", "τ", tau, "The unit's timescale. τ = 1: no memory at all, the state is the input. Large τ: slow, long memory.", "timescale"), tauValue),
     pulseReadout, pulsePlot,
-    h("div", { class: "lesson-text" },
-      h("p", {}, "The same rule runs in the trained auditory network MTRNN_a while it speaks. Pick a scene: the model perceives it, the cell assemblies set the slow context c_a,0, and MTRNN_a produces phonemes. The IO layer (τ = 2) flickers with every phoneme, Cf (τ = 5) carries syllables and words, Cs (τ = 70) barely moves: it holds the whole sentence.")),
+    prose(["The same rule runs in the trained auditory network MTRNN_a while it speaks. Pick a scene: the model perceives it, the cell assemblies set the slow context c_a,0, and MTRNN_a produces phonemes. The IO layer (τ = 2) flickers with every phoneme, Cf (τ = 5) carries syllables and words, Cs (τ = 70) barely moves: it holds the whole sentence."]),
     controls(
       control(ctx, "scene", "scene", scene, "The recording the model describes. Its perception sets c_a,0; the heatmaps show MTRNN_a producing the utterance.", "Csc"),
       control(ctx, "time", "time step", time, "The shared time cursor: the red line in all three layers and the phoneme being produced at that step.", "phoneme"),
@@ -55,9 +55,9 @@ export async function render(root, ctx, index) {
     const refs = Object.entries(pulse.references).map(([name, z]) => ({
       x, y: z, name: `${name} τ=${{ IO: 2, Cf: 5, Cs: 70 }[name]}`, mode: "lines", line: { width: 1, dash: "dot" }, opacity: 0.6 }));
     Plotly.react(pulsePlot, [
-      { x, y: pulse.input, name: "input x", mode: "lines", line: { color: "#999", shape: "hv" } },
+      { x, y: pulse.input, name: "input x", mode: "lines", line: { color: NEUTRAL, shape: "hv" } },
       ...refs,
-      { x, y: pulse.z, name: `z (τ = ${pulse.tau})`, mode: "lines", line: { color: "#d22828", width: 3 } },
+      { x, y: pulse.z, name: `z (τ = ${pulse.tau})`, mode: "lines", line: { color: OKABE_ITO.vermillion, width: 3 } },
     ], baseLayout({ xaxis: { title: { text: "time step" } }, yaxis: { title: { text: "state" }, range: [0, 1.05] }, legend: { orientation: "h", y: 1.15 } }), CONFIG);
     pulseReadout.replaceChildren(
       h("span", {}, "half-life: ", h("b", { id: "half-life" }, pulse.half_life_steps === null ? "none (τ = 1 forgets at once)" : `${num(pulse.half_life_steps, 1)} steps`)),
@@ -91,7 +91,7 @@ export async function render(root, ctx, index) {
     tauValue.textContent = tau.value;
     ctx.setParams({ tau: tau.value });
     try {
-      pulse = await get(`/api/lessons/timescales/pulse?tau=${tau.value}`);
+      pulse = await get("/api/lessons/timescales/pulse", { tau: tau.value });
       drawPulse();
     } catch (e) { error.replaceChildren(errorBox(e.message)); }
   });
@@ -99,7 +99,7 @@ export async function render(root, ctx, index) {
   const loadActivity = latest(async () => {
     ctx.setParams({ scene: scene.value });
     try {
-      activity = await get(`/api/lessons/timescales/activity?scene=${encodeURIComponent(scene.value)}`);
+      activity = await get("/api/lessons/timescales/activity", { scene: scene.value });
       error.replaceChildren();
     } catch (e) { error.replaceChildren(errorBox(e.message)); return; }
     time.max = activity.steps - 1;

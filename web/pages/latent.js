@@ -1,8 +1,9 @@
 // Latent explorer: click anywhere on the auditory Csc plane and read what the robot would say there.
 
 import { get, post } from "../js/api.js";
-import { h, help, errorBox, fmt } from "../js/dom.js";
-import { plotly, CONFIG, baseLayout, OBJECT_COLOURS } from "../js/plots.js";
+import { h, help, errorBox, fmt, answerOrError } from "../js/dom.js";
+import { ACTION_SYMBOLS, COLOUR_COLOURS, HIGHLIGHT } from "../js/palette.js";
+import { plotly, CONFIG, baseLayout } from "../js/plots.js";
 
 export const meta = { route: "latent", title: "Latent explorer", order: 40,
   description: "what would the robot say here? generate from any point of the auditory Csc plane" };
@@ -17,22 +18,16 @@ export async function render(root, ctx) {
     h("div", { class: "grid-plot" }, plot,
       h("div", { class: "side" }, h("h2", {}, "The robot says ", help("Decoded from MTRNN_a's output: phonemes -> nearest words of the lexicon.", "phoneme")),
         h("p", { class: "said big" }, said), info, h("h2", {}, "Clicked so far"), history)));
-  let data;
-  try {
-    data = await get("/api/csc?space=a");
-  } catch (e) {
-    root.append(errorBox(e.message));
-    return;
-  }
+  const data = await answerOrError(root, get("/api/csc", { space: "a" }));
+  if (!data) return;
   const Plotly = await plotly();
-  const symbols = { pull: "circle", push: "square", "show me": "diamond", slide: "triangle-up" };
   const xs = data.points.map((p) => p.x), ys = data.points.map((p) => p.y);
   const pad = (a) => { const lo = Math.min(...a), hi = Math.max(...a), d = (hi - lo || 1) * 0.25; return [lo - d, hi + d]; };
   const corpus = { type: "scatter", mode: "markers", name: "corpus", x: xs, y: ys,
     text: data.points.map((p) => `${p.id}<br>model: ${p.generated}`), hovertemplate: "%{text}<extra></extra>",
-    marker: { size: 8, opacity: 0.55, color: data.points.map((p) => OBJECT_COLOURS[p.colour]), symbol: data.points.map((p) => symbols[p.action]) } };
+    marker: { size: 8, opacity: 0.55, color: data.points.map((p) => COLOUR_COLOURS[p.colour]), symbol: data.points.map((p) => ACTION_SYMBOLS[p.action]) } };
   const probe = { type: "scatter", mode: "markers", name: "probe", x: [], y: [], hoverinfo: "skip",
-    marker: { size: 16, symbol: "x", color: "#000" } };
+    marker: { size: 16, symbol: "x", color: HIGHLIGHT } };
   await Plotly.newPlot(plot, [corpus, probe], baseLayout({ height: 560, hovermode: "closest", showlegend: false, dragmode: false,
     xaxis: { title: "PC1", range: pad(xs), zeroline: false }, yaxis: { title: "PC2", range: pad(ys), zeroline: false } }), CONFIG);
 

@@ -1,9 +1,10 @@
 // Scene view: the arm in 3D, the camera frames, proprioception, and what the model says (Fig. 8a).
 
-import { get, post } from "../js/api.js";
+import { get, post, withQuery } from "../js/api.js";
 import { h, field, help, badge, errorBox, fmt } from "../js/dom.js";
 import { Cursor } from "../js/cursor.js";
-import { plotly, CONFIG, baseLayout, cursorShape, JOINT_COLOURS } from "../js/plots.js";
+import { CATEGORICAL } from "../js/palette.js";
+import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
 
 export const meta = { route: "scene", title: "Scene", nav: false };
 
@@ -29,7 +30,7 @@ export async function render(root, ctx) {
   root.replaceChildren();
   const s = detail.summary;
   const frameUrl = (i, overlay, width) =>
-    `/api/scenes/${id}/frames/${i}.jpg?${overlay ? "overlay=true&" : ""}${width ? `width=${width}` : ""}`;
+    withQuery(`/api/scenes/${id}/frames/${i}.jpg`, { overlay: overlay ? "true" : null, width });
 
   // header: what the model said against what the teacher said
   const verdict = description.correct === null ? null
@@ -46,7 +47,7 @@ export async function render(root, ctx) {
       h("div", { class: "muted small" }, `phonemes: ${description.phonemes.join(" ")}`),
       h("div", { class: "muted small" },
         `model ${description.model} · ${fmt(description.timings.total_ms, 1)} ms (model ${fmt(description.timings.model_ms, 1)} ms)`,
-        " · ", h("a", { href: `#/csc?space=a&highlight=${encodeURIComponent(id)}` }, "see it in the Csc spaces"))));
+        " · ", h("a", { href: withQuery("#/csc", { space: "a", highlight: id }) }, "see it in the Csc spaces"))));
 
   // controls of the shared cursor
   const t0 = Math.min(Number(ctx.params.t || 0), detail.duration_s);
@@ -94,7 +95,7 @@ export async function render(root, ctx) {
   const Plotly = await plotly();
   const times = detail.joints.map((_, i) => i / detail.fps);
   await Plotly.newPlot(propPlot, detail.joint_names.map((name, j) => ({
-    x: times, y: detail.proprioception.map((r) => r[j]), name, mode: "lines", line: { color: JOINT_COLOURS[j] },
+    x: times, y: detail.proprioception.map((r) => r[j]), name, mode: "lines", line: { color: CATEGORICAL[j] },
   })), baseLayout({ height: 260, xaxis: { title: "time (s)" }, yaxis: { range: [0, 1] }, shapes: [cursorShape(t0)],
     legend: { orientation: "h", y: -0.3 } }), CONFIG);
   await Plotly.newPlot(visPlot, [{ type: "heatmap", x: times, y: detail.vision_feature_names,

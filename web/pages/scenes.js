@@ -1,15 +1,16 @@
 // Scenes: the 64 scenes x 4 recordings of the corpus, filterable, with train/test badges.
 
 import { get } from "../js/api.js";
-import { h, field, badge, help, errorBox } from "../js/dom.js";
+import { h, field, badge, help, answerOrError } from "../js/dom.js";
+import { ACTIONS, OBJECT_COLOURS, SHAPES } from "../js/palette.js";
 
 export const meta = { route: "scenes", title: "Scenes", order: 10,
   description: "the corpus: 64 scenes, each recorded 4 times" };
 
 const OPTIONS = {
-  action: ["pull", "push", "show me", "slide"],
-  colour: ["blue", "green", "red", "yellow"],
-  shape: ["apple", "banana", "dice", "phone"],
+  action: ACTIONS,
+  colour: OBJECT_COLOURS,
+  shape: SHAPES,
   variant: ["0", "1", "2", "3"],
   split: ["train", "test"],
 };
@@ -49,13 +50,9 @@ export async function render(root, ctx) {
       " recorded four times. Pick one to watch the arm, see what the robot saw and read what the model says."),
     filters, count, table);
 
-  let all = [];
-  try {
-    all = (await get("/api/scenes")).scenes;
-  } catch (e) {
-    root.append(errorBox(e.message));
-    return;
-  }
+  const answer = await answerOrError(root, get("/api/scenes"));
+  if (!answer) return;
+  const all = answer.scenes;
   function update() {
     const f = Object.fromEntries(Object.entries(selects).map(([k, s]) => [k, s.value]));
     const q = search.value.trim().toLowerCase();

@@ -7,7 +7,8 @@ import json
 import pytest
 
 from model import checkpoint
-from model.experiments.evaluation import fold_split, run_once, scene_key, score
+from model.data import scene_key
+from model.experiments.evaluation import fold_split, run_once, score
 from model.training import train
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 

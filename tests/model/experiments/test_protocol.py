@@ -26,7 +26,7 @@ from model.experiments.protocol import (
 from model.experiments.runstore import RunStore
 from tests.model.tiny_data import TINY_OVERRIDES, tiny_sequence_set
 
-HERE = Path(__file__).resolve().parent
+ROOT = Path(__file__).resolve().parents[3]  # the checkout: `tests.model.tiny_data` and `model` import from it
 
 
 def tiny_config() -> dict:
@@ -136,7 +136,7 @@ def _done(db: Path) -> dict[str, tuple[float, int]]:
 @pytest.mark.slow
 def test_an_evaluation_killed_midway_finishes_on_restart_with_every_run_exactly_once(tmp_path) -> None:
     script = tmp_path / "driver.py"
-    script.write_text(DRIVER.format(here=str(HERE)))
+    script.write_text(DRIVER.format(here=str(ROOT)))
     run_dir = tmp_path / "runs"
     db = run_dir / "runs.sqlite"
     proc = subprocess.Popen([sys.executable, str(script), str(run_dir)], start_new_session=True)

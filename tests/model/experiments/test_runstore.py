@@ -1,4 +1,4 @@
-"""The run store: planned runs, atomic completion, resumability, jobs surviving a restart."""
+"""The run store: planned runs, atomic completion, resumability."""
 
 from __future__ import annotations
 
@@ -67,15 +67,3 @@ def test_checkpoint_write_replaces_an_older_attempt(tmp_path) -> None:
     path = store.write_checkpoint("k", {"a": b"2"})
     assert sorted(p.name for p in path.iterdir()) == ["a"] and (path / "a").read_bytes() == b"2"
     assert [p.name for p in store.checkpoint_dir.iterdir()] == ["k"]
-
-
-def test_jobs_active_at_a_restart_are_marked_interrupted(tmp_path) -> None:
-    store = RunStore(tmp_path)
-    store.put_job("j1", "train", {"mode": "faithful"}, "running")
-    store.put_job("j2", "train", {"mode": "faithful"}, "done")
-    store.update_job("j1", progress={"epoch": 3})
-    reopened = RunStore(tmp_path)
-    assert reopened.mark_interrupted() == ["j1"]
-    jobs = {j["id"]: j for j in reopened.jobs()}
-    assert jobs["j1"]["status"] == "interrupted" and jobs["j1"]["progress"] == {"epoch": 3}
-    assert jobs["j2"]["status"] == "done"

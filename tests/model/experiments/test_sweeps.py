@@ -13,10 +13,10 @@ from model.experiments.sweeps import (
     cosine_run,
     cosine_specs,
     cosine_table,
-    mean_sem,
     psi_s_specs,
     psi_s_table,
 )
+from model.metrics import mean_sem
 
 
 def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None:
@@ -35,7 +35,7 @@ def test_cosine_runs_share_seeds_across_psi_and_carry_psi_to_the_runner() -> Non
     specs = cosine_specs([0.0, 5e-5], runs=3)
     assert [s.seed for s in specs[:3]] == [s.seed for s in specs[3:]] == [0, 1, 2]
     assert COSINE_RUNNER == "model.experiments.sweeps:cosine_run"
-    result = cosine_run(None, specs[3].mode, specs[3].fold, specs[3].seed)
+    result = cosine_run(None, specs[3].mode, specs[3].fold, specs[3].seed, specs[3].config)
     m = result.metrics["cosine"]
     assert m["epochs"] > 0 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0
     assert len(result.artifacts["csc"]) == 4  # four phase-shifted sequences (3.2.2)
@@ -84,7 +84,7 @@ def test_the_cosine_table_groups_by_psi() -> None:
         RunRecord(
             f"c{i}",
             "cosine",
-            "cosine:0.0",
+            "cosine",
             0,
             i,
             i,

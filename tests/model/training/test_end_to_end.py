@@ -12,15 +12,15 @@ import torch.nn.functional as F
 
 from data.scenario import all_scenes
 from model import checkpoint
+from model.assemblies import ASSEMBLIES, WordAssemblies
 from model.config import MTRNNConfig
 from model.encoding.utterance import Lexicon
-from model.multimtrnn import ASSEMBLIES
-from model.training import MODES, available_modes, encode_utterances, prepare
+from model.training import MODES
+from model.training.common import encode_utterances, prepare
 from model.training.end_to_end import (
     EndToEndOptions,
     InputNormaliser,
     PerceptionBatch,
-    WordAssemblies,
     WordSlots,
     calibrate,
     combinations_said,
@@ -238,19 +238,12 @@ def test_time_warp_replays_each_recording_at_its_own_speed() -> None:
 
 
 def test_mode_is_registered_and_deterministic() -> None:
-    assert "end_to_end" in available_modes()
+    assert "end_to_end" in MODES
     assert MODES["end_to_end"] is train_end_to_end
     data = tiny_corpus(variants=1)
-    options = EndToEndOptions(
-        auditory_epochs=2,
-        perception_epochs=2,
-        input_noise=0.1,
-        vision_window=5,
-        time_warp=0.3,
-        recombine=1.0,
-        selection_scenes=0,
-        average_from=0.5,
-        weight_decay=1e-4,
+    augmented = EndToEndOptions(auditory_epochs=2, perception_epochs=2, input_noise=0.1, vision_window=5)
+    options = replace(
+        augmented, time_warp=0.3, recombine=1.0, selection_scenes=0, average_from=0.5, weight_decay=1e-4
     )
     a = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)
     b = train_end_to_end(data, prepare(data, tiny_config()), seed=5, options=options)

@@ -9,10 +9,11 @@ import pytest
 import torch
 from safetensors.torch import load_file, save_file
 
-from model.experiments.evaluation import fold_split
+from model.checkpoint import load, save
+from model.experiments.evaluation import fold_split, run_once
 from model.multimtrnn import Description
 from model.training import MODES
-from model.training.peer import LEGACY, PeerConfig, PeerModel, load, run_once, save, train_peer
+from model.training.peer import LEGACY, PeerConfig, PeerModel, train_peer
 from tests.model.tiny_data import tiny_sequence_set
 
 FAST = PeerConfig(hidden=32, epochs=20, progress_every=10).to_dict()

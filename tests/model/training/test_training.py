@@ -1,27 +1,22 @@
-"""Training (model/training.py): the faithful staged recipe, psi as c_T's step size, modes, seeds."""
+"""Training (model/training/): the faithful staged recipe, psi as c_T's step size, modes, seeds."""
 
 from __future__ import annotations
 
 import pytest
 import torch
 
+from model.assemblies import CellAssemblies
 from model.config import MTRNNConfig, TrainingConfig
 from model.encoding.utterance import PHONEMES, encode_utterance
 from model.mtrnn import MTRNN, context_abstraction_loss
-from model.multimtrnn import CellAssemblies
-from model.training import (
-    GENERATION_MARGIN,
-    MODES,
+from model.training import MODES, train
+from model.training.common import GENERATION_MARGIN, ProgressReporter, encode_utterances, generation_steps
+from model.training.faithful import (
     FaithfulOptions,
-    ProgressReporter,
     assemblies_loss,
     distinct_rows,
-    encode_utterances,
     fit_assemblies,
-    generation_steps,
-    register_mode,
     solve_assemblies,
-    train,
     train_encoder,
     train_faithful,
 )
@@ -137,20 +132,18 @@ def test_adam_is_selectable():
     assert losses[-1] < losses[0]
 
 
-def test_modes_are_a_registry():
+def test_modes_are_a_registry(monkeypatch: pytest.MonkeyPatch):
     with pytest.raises(ValueError, match="unknown training mode"):
         train(tiny_corpus(variants=1), "no_such_mode", tiny_config(1))
     calls = []
 
     def fake(data, config, seed, progress):
-        calls.append((len(data), config.generation_steps, seed))
-        return MODES["faithful"](data, config, seed, progress)
+        trained = MODES["faithful"](data, config, seed, progress)
+        calls.append((len(data), trained.model.config.generation_steps, seed))
+        return trained
 
-    register_mode("test_fake", fake)
-    try:
-        train(tiny_corpus(variants=1), "test_fake", tiny_config(1), seed=3)
-    finally:
-        del MODES["test_fake"]
+    monkeypatch.setitem(MODES, "test_fake", fake)
+    train(tiny_corpus(variants=1), "test_fake", tiny_config(1), seed=3)
     assert calls and calls[0][0] == 12 and calls[0][2] == 3 and calls[0][1] > 0
 
 

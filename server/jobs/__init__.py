@@ -1,0 +1,1 @@
+"""The app's one job system: `manager.JobManager` runs the kinds of `kinds` and keeps them in `store`."""

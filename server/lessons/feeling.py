@@ -1,0 +1,98 @@
+"""Lesson 4, feeling: one action on the four shapes of one colour, and why touch alone is ambiguous."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from data.nao import JOINT_NAMES
+from data.scenario import ACTIONS, COLOURS, SHAPES
+from data.world import FPS
+from server.lessons import rounded
+from server.services.corpus import Corpus
+from server.services.errors import Invalid, NotFound
+from server.services.survey import Survey, SurveyService
+
+
+def _resample(x: np.ndarray, steps: int = 50) -> np.ndarray:
+    """A [T, F] sequence linearly resampled to `steps` steps (compares sequences of any length)."""
+    t = np.linspace(0.0, 1.0, len(x))
+    grid = np.linspace(0.0, 1.0, steps)
+    return np.stack([np.interp(grid, t, x[:, j]) for j in range(x.shape[1])], axis=1)
+
+
+def _rms(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sqrt(((_resample(a) - _resample(b)) ** 2).mean()))
+
+
+def _find(corpus: Corpus, action: str, colour: str, shape: str) -> Any | None:
+    """The corpus entry of a scene (its lowest variant present)."""
+    matches = [
+        e
+        for e in corpus.entries.values()
+        if (e.scene.action, e.scene.colour, e.scene.shape) == (action, colour, shape)
+    ]
+    return min(matches, key=lambda e: e.variant) if matches else None
+
+
+def _row(survey: Survey, pair: str, what: str, x: Any, y: Any) -> dict:
+    """Distances of two recordings: joint angles (RMS, resampled) and both Csc spaces."""
+    index = {rid: i for i, rid in enumerate(survey.ids)}
+
+    def dist(space: str) -> float:
+        c = survey.vectors(space)
+        return round(float(np.linalg.norm(c[index[x.id]] - c[index[y.id]])), 4)
+
+    return {
+        "pair": pair,
+        "what": what,
+        "joints_rms": round(_rms(x.proprioception, y.proprioception), 4),
+        "c_s": dist("s"),
+        "c_v": dist("v"),
+    }
+
+
+def _comparison(corpus: Corpus, surveys: SurveyService, action: str) -> dict | None:
+    """Why touch alone cannot tell a red apple from a blue phone: compare distances."""
+    a = _find(corpus, action, "red", "apple")
+    b = _find(corpus, action, "blue", "phone")
+    other_action = next(x for x in ACTIONS if x != action)
+    c = _find(corpus, other_action, "red", "apple")
+    if a is None or b is None or c is None:
+        return None
+    survey = surveys.survey()
+    rows = [
+        _row(survey, f"{action} red apple vs {action} blue phone", "same action, different object", a, b),
+        _row(
+            survey, f"{action} red apple vs {other_action} red apple", "different action, same object", a, c
+        ),
+    ]
+    a2 = next((e for e in corpus.entries.values() if e.scene == a.scene and e.variant != a.variant), None)
+    if a2 is not None:
+        pair = f"{action} red apple, teacher {a.variant} vs teacher {a2.variant}"
+        rows.append(_row(survey, pair, "same scene, another teacher", a, a2))
+    return {"ids": [a.id, b.id, c.id], "rows": rows, "model": survey.model}
+
+
+def feeling(corpus: Corpus, surveys: SurveyService, action: str, colour: str) -> dict:
+    """Proprioception of one action on the four shapes of one colour, and the ambiguity of touch."""
+    if action not in ACTIONS:
+        raise Invalid(f"action must be one of {', '.join(ACTIONS)}")
+    if colour not in COLOURS:
+        raise Invalid(f"colour must be one of {', '.join(COLOURS)}")
+    found = [(shape, _find(corpus, action, colour, shape)) for shape in SHAPES]
+    series = [
+        {"id": e.id, "shape": shape, "fps": FPS, "proprioception": rounded(np.asarray(e.proprioception).T, 4)}
+        for shape, e in found
+        if e is not None
+    ]
+    if not series:
+        raise NotFound(f"the corpus has no '{action}' on a {colour} object")
+    return {
+        "action": action,
+        "colour": colour,
+        "joint_names": list(JOINT_NAMES),
+        "series": series,
+        "comparison": _comparison(corpus, surveys, action),
+    }
