@@ -2,7 +2,7 @@
 
     .venv/bin/python docs/make_actions_figure.py [--out docs/actions.png] [--seed 0]
 
-One row per action, five frames spread over the recording, rendered by data/camera.py from a
+One row per action, five frames spread over the recording, rendered by data/camera/ from a
 motion of data/motion.py. Deterministic for a seed.
 """
 

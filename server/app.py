@@ -19,7 +19,7 @@ from pathlib import Path
 
 import plotly
 from fastapi import FastAPI, Request
-from fastapi.responses import FileResponse, JSONResponse
+from fastapi.responses import FileResponse, JSONResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
 
@@ -37,6 +37,8 @@ from server.settings import Settings
 logger = logging.getLogger(__name__)
 
 PLOTLY_JS = Path(plotly.__file__).resolve().parent / "package_data" / "plotly.min.js"
+# Pages that once had their own HTML and now are routes of the one web router (web/js/app.js).
+MOVED_PAGES = {"/jobs.html": "jobs", "/results.html": "results", "/lessons/": "lessons"}
 CorpusLoader = Callable[[Settings], Corpus]
 
 
@@ -91,6 +93,13 @@ def _answer_errors(app: FastAPI) -> None:
         return JSONResponse({"detail": str(exc)}, status_code=400)
 
 
+def _redirect_to(route: str) -> Callable[[], RedirectResponse]:
+    def redirect() -> RedirectResponse:
+        return RedirectResponse(f"/#/{route}", status_code=301)
+
+    return redirect
+
+
 def create_app(
     settings: Settings | None = None,
     load_corpus: CorpusLoader = Corpus.load,
@@ -124,5 +133,7 @@ def create_app(
             PLOTLY_JS, media_type="text/javascript", headers={"Cache-Control": "max-age=86400"}
         )
 
+    for old, route in MOVED_PAGES.items():
+        app.add_api_route(old, _redirect_to(route), include_in_schema=False)
     app.mount("/", StaticFiles(directory=settings.web_dir, html=True), name="web")
     return app

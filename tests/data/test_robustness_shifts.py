@@ -1,4 +1,4 @@
-"""The robustness benchmark's shifts (benchmarks/robustness.py): each one yields a valid format-v1
+"""The robustness benchmark's shifts (benchmarks/shifts.py): each one yields a valid format-v1
 recording, and each moves its own parameters outside what the corpus samples, and only those."""
 
 from __future__ import annotations
