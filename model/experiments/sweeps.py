@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from model.experiments.protocol import ProtocolResult, apply_overrides, plan, run_protocol
-from model.experiments.runstore import RunRecord, RunSpec, RunStore
+from model.experiments.protocol import apply_overrides, plan
+from model.experiments.runstore import RunRecord, RunSpec
 from model.metrics import mean_sem
 
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
@@ -43,24 +43,6 @@ def psi_s_specs(
         cfg = apply_overrides(config, {"training.psi_s": float(value)})
         specs += plan("psi_s", mode, folds, inits, cfg, digest, base_seed, params={"psi_s": float(value)})
     return specs
-
-
-def run_psi_s_sweep(
-    data: Any,
-    values: Sequence[float],
-    mode: str,
-    folds: int,
-    inits: int,
-    store: RunStore,
-    config: Mapping[str, Any],
-    digest: str,
-    base_seed: int = 0,
-    **engine: Any,
-) -> ProtocolResult:
-    """Every (psi_s, fold, init) run not yet in `store`; `engine` as `run_protocol`'s (engine,
-    workers, address, progress)."""
-    specs = psi_s_specs(values, mode, folds, inits, config, digest, base_seed)
-    return run_protocol(data, specs, store, **engine)
 
 
 # --- the cosine experiment as engine tasks ---------------------------------------------------------
@@ -121,14 +103,6 @@ def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list
         for i, v in enumerate(values)
         for r in range(runs)
     ]
-
-
-def run_cosine_sweep(
-    values: Sequence[float], runs: int, store: RunStore, base_seed: int = 0, **engine: Any
-) -> ProtocolResult:
-    """Every (psi, run) of the cosine experiment not yet in `store`; `engine` as `run_protocol`'s."""
-    specs = cosine_specs(values, runs, base_seed)
-    return run_protocol(None, specs, store, runner=COSINE_RUNNER, **engine)
 
 
 # --- tables -----------------------------------------------------------------------------------------

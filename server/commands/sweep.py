@@ -54,8 +54,8 @@ def _fmt(v: float, e: float) -> str:
 
 
 def run_psi_s(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import data_digest
-    from model.experiments.sweeps import PSI_S_PAPER, psi_s_specs, psi_s_table, run_psi_s_sweep
+    from model.experiments.protocol import data_digest, run_protocol
+    from model.experiments.sweeps import PSI_S_PAPER, psi_s_specs, psi_s_table
 
     values = args.values or list(PSI_S_PAPER)
     config = build_config(parse_overrides(args.overrides), args.mode)
@@ -66,18 +66,7 @@ def run_psi_s(args: argparse.Namespace) -> int:
     result = with_progress(
         store,
         specs,
-        lambda update: run_psi_s_sweep(
-            data,
-            values,
-            args.mode,
-            args.folds,
-            args.inits,
-            store,
-            config,
-            digest,
-            args.seed,
-            **engine_options(args, update),
-        ),
+        lambda update: run_protocol(data, specs, store, **engine_options(args, update)),
     )
     table = psi_s_table(result.runs)
     if args.json:
@@ -99,7 +88,8 @@ def run_psi_s(args: argparse.Namespace) -> int:
 
 
 def run_cosine(args: argparse.Namespace) -> int:
-    from model.experiments.sweeps import PSI_COSINE_PAPER, cosine_specs, cosine_table, run_cosine_sweep
+    from model.experiments.protocol import run_protocol
+    from model.experiments.sweeps import COSINE_RUNNER, PSI_COSINE_PAPER, cosine_specs, cosine_table
 
     values = args.values or list(PSI_COSINE_PAPER)
     store = run_store(args.run_dir)
@@ -107,7 +97,7 @@ def run_cosine(args: argparse.Namespace) -> int:
     result = with_progress(
         store,
         specs,
-        lambda update: run_cosine_sweep(values, args.runs, store, args.seed, **engine_options(args, update)),
+        lambda update: run_protocol(None, specs, store, runner=COSINE_RUNNER, **engine_options(args, update)),
     )
     table = cosine_table(result.runs)
     if args.json:
