@@ -9,6 +9,12 @@ MTRNN_VISER                   "0" starts the app without the 3D viewer (scripts,
 MTRNN_FRAME_CACHE             how many corpus recordings keep their re-rendered frames (default 8)
 MTRNN_RUN_DIR                 the run store of evaluations and the app's jobs (default runs/)
 MTRNN_FIGURES_DIR             where `mtrnn report` wrote its figures (default docs/figures)
+MTRNN_USER_DIR                the app's own data: models trained in the app (models/), its jobs table
+                              and its evaluations' run store (runs/); default runs/app
+MTRNN_MAX_JOBS                training / evaluation jobs running at once (default: 1 per 2 cores)
+MTRNN_DECODE_SLOTS            uploads read and encoded at once (default: one per core)
+MTRNN_ALLOWED_HOSTS           comma-separated Host names the app answers (default: loopback names)
+MTRNN_TOKEN                   access token; required when the app listens on a non-loopback address
 """
 
 from __future__ import annotations
@@ -20,6 +26,8 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parent.parent
 WEB_DIR = REPO_ROOT / "web"
 DEFAULT_JOB_DATA = "server.jobs.kinds:corpus_data"
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1", "[::1]")
+CORES = os.cpu_count() or 1
 
 
 def _env_path(name: str) -> Path | None:
@@ -45,6 +53,12 @@ class Settings:
     job_data: str = DEFAULT_JOB_DATA  # "module:function" loading a job's SequenceSet
     cosine_epochs: int = 1000  # a live cosine run (lesson 5) stops here if not converged before
     cosine_snapshot_every: int = 10  # epochs between two Csc snapshots of a live cosine run
+    user_dir: Path = REPO_ROOT / "runs" / "app"  # models trained in the app, its jobs and evaluations
+    max_jobs: int = max(1, CORES // 2)  # training / evaluation jobs running at once
+    decode_slots: int = CORES  # uploads read and encoded at once; the others wait or get 503
+    max_json_bytes: int = 1024**2  # largest JSON request body
+    allowed_hosts: tuple[str, ...] = LOOPBACK_HOSTS  # Host names the app answers
+    token: str | None = None  # access token (required on a non-loopback address)
 
     @classmethod
     def from_env(cls, **overrides: object) -> Settings:
@@ -58,13 +72,25 @@ class Settings:
             values["model"] = os.environ["MTRNN_MODEL"]
         if "MTRNN_VISER" in os.environ:
             values["viser"] = os.environ["MTRNN_VISER"] not in ("0", "false", "no")
-        if "MTRNN_FRAME_CACHE" in os.environ:
-            values["frame_cache"] = int(os.environ["MTRNN_FRAME_CACHE"])
+        for name, key in (
+            ("MTRNN_FRAME_CACHE", "frame_cache"),
+            ("MTRNN_MAX_JOBS", "max_jobs"),
+            ("MTRNN_DECODE_SLOTS", "decode_slots"),
+        ):
+            if name in os.environ:
+                values[key] = int(os.environ[name])
+        if "MTRNN_ALLOWED_HOSTS" in os.environ:
+            values["allowed_hosts"] = tuple(
+                h.strip() for h in os.environ["MTRNN_ALLOWED_HOSTS"].split(",") if h.strip()
+            )
+        if os.environ.get("MTRNN_TOKEN"):
+            values["token"] = os.environ["MTRNN_TOKEN"]
         for name, key in (
             ("MTRNN_MODELS_DIR", "models_dir"),
             ("MTRNN_CORPUS", "corpus_path"),
             ("MTRNN_RUN_DIR", "run_dir"),
             ("MTRNN_FIGURES_DIR", "figures_dir"),
+            ("MTRNN_USER_DIR", "user_dir"),
         ):
             if (p := _env_path(name)) is not None:
                 values[key] = p
