@@ -16,6 +16,7 @@ run: $(STAMP)            ## set up and start the app on its shipped defaults
 
 test: $(STAMP)           ## set up and run the whole suite (fast, slow, browser, cluster)
 	./scripts/ensure-chromium
+	./scripts/ensure-axe
 	$(VENV)/bin/pytest -q
 
 test-fast: $(STAMP)      ## the quick subset while developing

@@ -51,7 +51,7 @@ import cv2
 import numpy as np
 
 from data.camera import Appearance, head_angles, project, render_frames
-from data.motion import Motion, Teacher, generate_motion
+from data.motion import Motion, Teacher, generate_motion, retimed
 from data.recording import CSV_HEADER, Recording, add_zip_member, read_recording, write_zip
 from data.scenario import ACTIONS, COLOURS, SHAPES, Scene, all_scenes
 from data.world import FPS, OBJECT_HOME, TABLE_Z
@@ -282,29 +282,6 @@ def make_plan(shift: str, scene: Scene, number: int, seed: int, variant: str | N
 # ------------------------------------------------------------------------------ making the recording
 
 
-def _retime(motion: Motion, scale: float) -> Motion:
-    """The motion played `scale` times slower (> 1) or faster, resampled at its own frame rate."""
-    n = len(motion.joints)
-    steps = max(2, int(round(n * scale)))
-    src = np.minimum(np.arange(steps) / scale, n - 1)
-    idx = np.arange(n)
-
-    def warp(values: np.ndarray) -> np.ndarray:
-        flat = values.reshape(n, -1)
-        out = np.stack([np.interp(src, idx, flat[:, j]) for j in range(flat.shape[1])], axis=1)
-        return out.reshape((steps, *values.shape[1:]))
-
-    return Motion(
-        joints=warp(motion.joints),
-        hand=warp(motion.hand),
-        path=warp(motion.path),
-        object_xy=warp(motion.object_xy),
-        object_yaw=warp(motion.object_yaw),
-        contact=motion.contact[np.round(src).astype(int)],
-        fps=motion.fps,
-    )
-
-
 def _every(motion: Motion, stride: int) -> Motion:
     """Every `stride`-th time step of the motion (a camera at a lower frame rate)."""
     return Motion(
@@ -323,7 +300,7 @@ def simulate(plan: Plan, steps: int | None = None) -> Motion:
     motion_seq = _streams(plan.seed, plan.scene, plan.number)[1]
     motion = generate_motion(plan.scene, plan.teacher, np.random.default_rng(motion_seq))
     if plan.time_scale != 1.0:
-        motion = _retime(motion, plan.time_scale)
+        motion = retimed(motion, plan.time_scale)
     if steps is not None:
         motion = dataclasses.replace(
             motion,

@@ -300,3 +300,29 @@ def generate_motion(scene: Scene, teacher: Teacher, rng: np.random.Generator) ->
         object_yaw=object_yaw,
         contact=contact,
     )
+
+
+def retimed(motion: Motion, slower: float, fps: float | None = None) -> Motion:
+    """The motion played `slower` times slower (< 1: faster) and sampled at `fps` Hz (default: its
+    own rate): joints, hand, path and object pose interpolated linearly between the taught frames."""
+    fps = motion.fps if fps is None else fps
+    n = len(motion.joints)
+    rate = fps / motion.fps  # samples per taught frame at the taught speed
+    steps = max(2, int(round(n * slower * rate)))
+    taught = np.minimum(np.arange(steps) / rate / slower, n - 1)  # taught frame index of each sample
+    frames = np.arange(n)
+
+    def interp(values: np.ndarray) -> np.ndarray:
+        flat = values.reshape(n, -1)
+        out = np.stack([np.interp(taught, frames, flat[:, j]) for j in range(flat.shape[1])], axis=1)
+        return out.reshape((steps, *values.shape[1:]))
+
+    return Motion(
+        joints=interp(motion.joints),
+        hand=interp(motion.hand),
+        path=interp(motion.path),
+        object_xy=interp(motion.object_xy),
+        object_yaw=interp(motion.object_yaw),
+        contact=motion.contact[np.round(taught).astype(int)],
+        fps=fps,
+    )

@@ -100,6 +100,11 @@ class WordAssemblies(nn.Module):
     def words(self) -> list[str]:
         return [w for s in self._kwargs["slots"] for w in s]
 
+    @property
+    def slots(self) -> list[list[str]]:
+        """The phrases of each slot, in the order of their word units."""
+        return [list(s) for s in self._kwargs["slots"]]
+
     @torch.no_grad()
     def redraw_projection(self, generator: torch.Generator) -> None:
         """New initial E, e (a fresh start of the auditory stage)."""
@@ -131,6 +136,11 @@ class WordAssemblies(nn.Module):
             pk = torch.softmax(zk, dim=-1)
             parts.append(F.one_hot(pk.argmax(dim=-1), pk.shape[-1]).to(pk.dtype) if hard else pk)
         return torch.cat(parts, dim=-1)
+
+    def slot_probabilities(self, c_s: Tensor, c_v: Tensor) -> list[Tensor]:
+        """Each slot's word-unit activity p before winner-take-all [..., phrases]: the softmax of
+        eq. (17)'s z within the slot (or each word's logistic)."""
+        return list(self.word_activity(self.word_logits(c_s, c_v), hard=False).split(self.sizes, dim=-1))
 
     def speak(self, p: Tensor) -> Tensor:
         """c_a,0 = E p + e."""

@@ -83,14 +83,6 @@ class TrainingConfig:
     progress_every: int = 10  # epochs between two progress reports
     threads: int = 1  # torch.set_num_threads during training (one run per core is fastest)
 
-    def scaled(self, factor: float) -> TrainingConfig:
-        """The same recipe with every epoch count multiplied by `factor` (at least 1 epoch each)."""
-        d = asdict(self)
-        for key in d:
-            if key.startswith("epochs_"):
-                d[key] = max(1, round(d[key] * factor))
-        return TrainingConfig(**d)
-
 
 @dataclass
 class MultiMTRNNConfig:

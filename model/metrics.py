@@ -27,7 +27,6 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from sklearn.decomposition import PCA
 
 from model.encoding.words import align, raw_edit_distance, words_of
 
@@ -287,6 +286,8 @@ class CscPCA:
             raise ValueError(
                 f"n_components={self.n_components} exceeds min(patterns, units) = {min(x.shape)}"
             )
+        from sklearn.decomposition import PCA  # here, not at import: the CLI's describe never fits one
+
         pca = PCA(n_components=self.n_components, svd_solver="full").fit(x)
         components = pca.components_.copy()
         largest = np.argmax(np.abs(components), axis=1)

@@ -19,9 +19,10 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from model.assemblies import CellAssemblies
+from model.assemblies import CellAssemblies, WordAssemblies
 from model.config import MultiMTRNNConfig
 from model.encoding.utterance import Lexicon, decode_text
+from model.encoding.words import align
 from model.mtrnn import MTRNN
 
 
@@ -69,6 +70,43 @@ class ActivityTrace:
     visual: NetTrace
     auditory: NetTrace
     description: Description
+
+
+@dataclass
+class Timeline:
+    """What the model would say if asked at every step t of one recording (read up to t).
+
+    Entry t is the utterance generated from c_a,0(t), the assemblies' answer to the Csc states
+    z of MTRNN_s and MTRNN_v at step t; the last entry is `MultiMTRNN.describe`'s answer. A word
+    *settles* at the step from which it stays: one past the last step at which it was otherwise.
+    """
+
+    texts: list[str]  # [T] the utterance at each step
+    words: list[list[str]]  # [T] its words
+    csc_a: np.ndarray  # [T, csc_a] c_a,0(t)
+    word_settles: list[int]  # per word of the last utterance, the step from which it is said
+    slots: list[list[str]]  # the phrases of each slot (word units); empty for the paper's CAs
+    slot_probabilities: list[np.ndarray]  # per slot [T, phrases]: the word units' p at t
+    slot_settles: list[int]  # per slot, the step from which its most probable phrase stays
+
+
+def settle_step(holds: Sequence[bool] | np.ndarray) -> int:
+    """The step from which `holds` is true to the end: one past the last step at which it was
+    false (0 when it always held, len(holds) when it does not hold at the end)."""
+    false = np.flatnonzero(~np.asarray(holds, dtype=bool))
+    return int(false[-1]) + 1 if len(false) else 0
+
+
+def word_settles(words: Sequence[Sequence[str]]) -> list[int]:
+    """Per word of the last entry of `words` ([T] word lists), the step from which it is said:
+    word j is said at t when the edit alignment of words[t] to the last words matches it."""
+    final = list(words[-1])
+    said = np.zeros((len(words), len(final)), dtype=bool)
+    for t, w in enumerate(words):
+        for op, _, j in align(list(w), final).pairs:
+            if op == "match":
+                said[t, j] = True
+    return [settle_step(said[:, j]) for j in range(len(final))]
 
 
 def _net_trace(net: MTRNN, states: Tensor) -> NetTrace:
@@ -205,6 +243,44 @@ class MultiMTRNN(nn.Module):
             raise ValueError(f"c_a,0 must have {self.config.auditory.csc} values, got {c.shape[1]}")
         activity = self.generate(c)[0].numpy()
         return self._description(activity, lexicon, c[0].numpy(), None, None)
+
+    def csc_trajectories(self, proprioception: np.ndarray, vision: np.ndarray) -> tuple[Tensor, Tensor]:
+        """The Csc internal states z of MTRNN_s and MTRNN_v at every step while they abstract one
+        recording, [T, csc] each: row t is the c_T of the recording read up to step t (3.2)."""
+        if len(proprioception) != len(vision):
+            raise ValueError(
+                f"proprioception has {len(proprioception)} steps and vision {len(vision)}: "
+                "a timeline needs both on one time grid"
+            )
+        p, p_len = pad_sequences([proprioception], self.config.somatosensory.io)
+        v, v_len = pad_sequences([vision], self.config.visual.io)
+        _, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
+        _, v_states = self.visual.abstract(v, v_len, return_states=True)
+        return s_states[0, :, self.somatosensory.csc_slice], v_states[0, :, self.visual.csc_slice]
+
+    @torch.no_grad()
+    def timeline(self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon) -> Timeline:
+        """What the model would say if asked at every step of one recording (see `Timeline`).
+
+        c_s(t), c_v(t) -> assemblies (eq. 17) -> c_a,0(t) for all steps at once; MTRNN_a generates
+        from the c_a,0 of every step but the last in one batch; the last step is `describe` itself,
+        so the timeline ends exactly on the model's answer.
+        """
+        c_s, c_v = self.csc_trajectories(proprioception, vision)
+        c_a = self.assemblies(c_s, c_v)
+        final = self.describe(proprioception, vision, lexicon)
+        earlier = self.generate(c_a[:-1]).numpy() if len(c_a) > 1 else np.zeros((0, 1, 1))
+        said = [decode_text(a, lexicon) for a in earlier]
+        texts = [text for _, _, text in said] + [final.text]
+        words = [list(w) for _, w, _ in said] + [list(final.words)]
+        csc_a = np.concatenate([c_a[:-1].numpy(), final.csc_a[None]])
+        slots: list[list[str]] = []
+        probabilities: list[np.ndarray] = []
+        if isinstance(self.assemblies, WordAssemblies):
+            slots = self.assemblies.slots
+            probabilities = [p.numpy() for p in self.assemblies.slot_probabilities(c_s, c_v)]
+        slot_settles = [settle_step(p.argmax(axis=1) == p[-1].argmax()) for p in probabilities]
+        return Timeline(texts, words, csc_a, word_settles(words), slots, probabilities, slot_settles)
 
     @torch.no_grad()
     def activity_trace(

@@ -5,12 +5,15 @@ model registry, Csc survey, describing, jobs) and starts the 3D viewer. Every mo
 `server/routes/` that defines `router` is included, and every page module in `web/pages/` is
 listed by `GET /api/pages` for the navigation: adding a resource or a page is adding a file.
 A service's error (`server.services.errors`) becomes ``{"detail": message}`` with its status.
+Every request first passes `server.guard.RequestGuard` (its own Host names, the access token, its
+own Origin for state-changing requests and WebSockets, the JSON body limit).
 """
 
 from __future__ import annotations
 
 import importlib
 import logging
+import math
 import pkgutil
 import threading
 from collections.abc import AsyncIterator, Callable, Sequence
@@ -19,6 +22,8 @@ from pathlib import Path
 
 import plotly
 from fastapi import FastAPI, Request
+from fastapi.encoders import jsonable_encoder
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, RedirectResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
@@ -27,18 +32,20 @@ from data.nao import forward_kinematics
 from data.recording import RecordingError
 from server import routes
 from server.deps import Services, build_services
+from server.guard import RequestGuard
 from server.jobs.kinds import warm_up_cosine
 from server.jobs.manager import JobManager
 from server.schemas.common import PageList
 from server.services.corpus import Corpus
 from server.services.errors import ServiceError
-from server.settings import Settings
+from server.settings import REPO_ROOT, Settings
 
 logger = logging.getLogger(__name__)
 
 PLOTLY_JS = Path(plotly.__file__).resolve().parent / "package_data" / "plotly.min.js"
 # Pages that once had their own HTML and now are routes of the one web router (web/js/app.js).
 MOVED_PAGES = {"/jobs.html": "jobs", "/results.html": "results", "/lessons/": "lessons"}
+RECORDING_FORMAT = REPO_ROOT / "docs" / "recording-format.md"  # the format's full text, linked by Upload
 CorpusLoader = Callable[[Settings], Corpus]
 
 
@@ -92,6 +99,22 @@ def _answer_errors(app: FastAPI) -> None:
     async def recording_error(request: Request, exc: RecordingError) -> JSONResponse:
         return JSONResponse({"detail": str(exc)}, status_code=400)
 
+    @app.exception_handler(RequestValidationError)
+    async def invalid_request(request: Request, exc: RequestValidationError) -> JSONResponse:
+        # FastAPI's own answer echoes the input: a NaN sent in a JSON body would make it a 500
+        return JSONResponse({"detail": _finite(jsonable_encoder(exc.errors()))}, status_code=422)
+
+
+def _finite(value: object) -> object:
+    """`value` with every NaN or infinity (which JSON cannot carry) written as a string."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
+
 
 def _redirect_to(route: str) -> Callable[[], RedirectResponse]:
     def redirect() -> RedirectResponse:
@@ -119,6 +142,7 @@ def create_app(
         lifespan=_lifespan(settings, load_corpus, full),
     )
     app.state.settings = settings
+    app.add_middleware(RequestGuard, settings=settings)  # Host, token, Origin, JSON size
     _include_routers(app, routers)
     _answer_errors(app)
 
@@ -132,6 +156,10 @@ def create_app(
         return FileResponse(
             PLOTLY_JS, media_type="text/javascript", headers={"Cache-Control": "max-age=86400"}
         )
+
+    @app.get("/docs/recording-format.md", include_in_schema=False)
+    def recording_format() -> FileResponse:
+        return FileResponse(RECORDING_FORMAT, media_type="text/markdown; charset=utf-8")
 
     for old, route in MOVED_PAGES.items():
         app.add_api_route(old, _redirect_to(route), include_in_schema=False)

@@ -1,8 +1,8 @@
 """The app's services, created once in the lifespan and handed to the routes as typed dependencies.
 
 `Services` holds the corpus, the one model registry, the one Csc survey, the describe service, the
-one job manager and (when running) the 3D viewer. A route asks for what it uses:
-``def route(models: ModelsDep, survey: SurveyDep) -> ...``.
+timelines (the live description), the one job manager and (when running) the 3D viewer. A route
+asks for what it uses: ``def route(models: ModelsDep, survey: SurveyDep) -> ...``.
 """
 
 from __future__ import annotations
@@ -16,8 +16,10 @@ from starlette.requests import HTTPConnection
 from server.jobs.manager import JobManager
 from server.services.corpus import Corpus
 from server.services.describe import DescribeService
+from server.services.examples import ExampleService
 from server.services.models import ModelRegistry
 from server.services.survey import SurveyService
+from server.services.timeline import TimelineService
 from server.settings import Settings
 
 if TYPE_CHECKING:
@@ -31,20 +33,25 @@ class Services:
     models: ModelRegistry
     survey: SurveyService
     describe: DescribeService
+    timeline: TimelineService
     jobs: JobManager
+    examples: ExampleService
     viewer: SceneViewer | None = None
 
 
 def build_services(settings: Settings, corpus: Corpus) -> Services:
     """Every service of one app over `corpus`; a finished training job's model joins the registry."""
     models = ModelRegistry.serving(settings, corpus)
+    describe = DescribeService(corpus, models, settings.upload_cache, settings.decode_slots)
     return Services(
         settings=settings,
         corpus=corpus,
         models=models,
         survey=SurveyService(corpus, models),
-        describe=DescribeService(corpus, models, settings.upload_cache),
+        describe=describe,
+        timeline=TimelineService(corpus, models, describe),
         jobs=JobManager(settings, on_model=models.register),
+        examples=ExampleService(settings.user_dir),
     )
 
 
@@ -77,6 +84,14 @@ def get_describe(request: Request) -> DescribeService:
     return services_of(request).describe
 
 
+def get_timeline(request: Request) -> TimelineService:
+    return services_of(request).timeline
+
+
+def get_examples(request: Request) -> ExampleService:
+    return services_of(request).examples
+
+
 def get_jobs(request: Request) -> JobManager:
     return request.app.state.jobs
 
@@ -87,4 +102,6 @@ CorpusDep = Annotated[Corpus, Depends(get_corpus)]
 ModelsDep = Annotated[ModelRegistry, Depends(get_models)]
 SurveyDep = Annotated[SurveyService, Depends(get_survey)]
 DescribeDep = Annotated[DescribeService, Depends(get_describe)]
+TimelineDep = Annotated[TimelineService, Depends(get_timeline)]
 JobsDep = Annotated[JobManager, Depends(get_jobs)]
+ExamplesDep = Annotated[ExampleService, Depends(get_examples)]

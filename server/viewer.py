@@ -2,10 +2,11 @@
 
 `SceneViewer` owns its viser server and every handle it adds. The arm is drawn from primitives
 placed by `data.nao.forward_kinematics` (links as boxes, joints as spheres), the
-same chain as the URDF. One time cursor is shared by the 3D view's own controls and the web page:
-`show(...)` loads a recording, `seek(t)`, `play()`, `pause()`, `set_speed(x)` move it, and every
-change is sent to the listeners (the page's WebSocket) so the camera frame, the plots and the
-phoneme being produced follow it.
+same chain as the URDF. The web page owns the controls (play, time, speed): `show(...)` loads a
+recording, `seek(t)`, `play()`, `pause()`, `set_speed(x)` move the time cursor (finite values only,
+`ValueError` otherwise), and every change is sent to the listeners (the page's WebSocket) so the
+camera frame, the plots and the phoneme being produced follow it. viser's own panel holds only the
+name of the recording shown: it has no control a client could change for the others.
 
     >>> viewer = SceneViewer(forward_kinematics)          # doctest: +SKIP
     >>> viewer.show("slide-red-apple-2", joints, FPS, "red", "apple")
@@ -14,11 +15,14 @@ phoneme being produced follow it.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import logging
+import math
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -33,6 +37,8 @@ ARM_RGB = (225, 225, 230)
 JOINT_RGB = (90, 95, 110)
 TABLE_RGB = (170, 130, 90)
 KEYPOINTS = ("shoulder", "elbow", "wrist", "hand")
+CAMERA_DIRECTION = np.array([0.55, -0.75, 0.45])  # from the scene's centre, front right and above
+SPEEDS = (0.05, 8.0)  # slowest and fastest replay
 
 
 def free_port(host: str = "127.0.0.1") -> int:
@@ -70,20 +76,25 @@ class SceneViewer:
 
     def __init__(self, forward_kinematics: Callable[[np.ndarray], dict[str, np.ndarray]]) -> None:
         self._fk = forward_kinematics
-        self.server = viser.ViserServer(host="127.0.0.1", port=free_port(), label="MultiMTRNN", verbose=False)
+        # viser prints a banner and its websockets server logs its own address: the app's URL is the
+        # one to open (viser is reached through the app's /viser proxy)
+        logging.getLogger("websockets.server").setLevel(logging.WARNING)
+        with _quiet():
+            self.server = viser.ViserServer(
+                host="127.0.0.1", port=free_port(), label="MultiMTRNN", verbose=False
+            )
         self.port = self.server.get_port()  # viser moves on silently if the port was taken meanwhile
         self.cursor = Cursor()
         self._lock = threading.RLock()
         self._keypoints: np.ndarray | None = None  # [T, 4, 3]
         self._fps = FPS
         self._listeners: list[Callable[[dict], None]] = []
-        self._updating_gui = False
         self._build_scene()
         self._build_gui()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="viewer-playback", daemon=True)
         self._thread.start()
-        logger.info("3D viewer (viser) on 127.0.0.1:%d", self.port)
+        logger.debug("3D viewer (viser) on 127.0.0.1:%d, reached through the app's /viser", self.port)
 
     # scene
     def _build_scene(self) -> None:
@@ -92,7 +103,7 @@ class SceneViewer:
         self.server.initial_camera.position = (0.42, -0.55, 0.3)
         self.server.initial_camera.look_at = (0.18, -0.08, 0.02)
         self.server.gui.configure_theme(
-            control_layout="collapsible", control_width="small", show_logo=False, show_share_button=False
+            control_layout="floating", control_width="small", show_logo=False, show_share_button=False
         )
         self.table = scene.add_box(
             "/table", color=TABLE_RGB, dimensions=(0.5, 0.7, 0.02), position=(0.2, -0.1, -0.1)
@@ -111,24 +122,7 @@ class SceneViewer:
         self.objects: dict[str, Any] = {}
 
     def _build_gui(self) -> None:
-        gui = self.server.gui
-        self.gui_title = gui.add_markdown("**No recording loaded.**")
-        self.gui_play = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY)
-        self.gui_pause = gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE)
-        self.gui_time = gui.add_slider("Time (s)", min=0.0, max=1.0, step=0.05, initial_value=0.0)
-        self.gui_speed = gui.add_slider("Speed", min=0.25, max=4.0, step=0.25, initial_value=1.0)
-        self.gui_play.on_click(lambda _: self.play())
-        self.gui_pause.on_click(lambda _: self.pause())
-
-        @self.gui_time.on_update
-        def _(_: Any) -> None:
-            if not self._updating_gui:
-                self.seek(float(self.gui_time.value))
-
-        @self.gui_speed.on_update
-        def _(_: Any) -> None:
-            if not self._updating_gui:
-                self.set_speed(float(self.gui_speed.value))
+        self.gui_title = self.server.gui.add_markdown("**No recording loaded.**")
 
     def _place_object(self, colour: str | None, shape: str | None, xy: np.ndarray, table_z: float) -> None:
         for handle in self.objects.values():
@@ -195,13 +189,32 @@ class SceneViewer:
                 float(np.ptp(hand[:, 1])) + 0.3,
                 0.02,
             )
-            self._place_object(colour, shape, hand[lowest, :2] + np.array([0.04, 0.0]), table_z)
+            object_xy = hand[lowest, :2] + np.array([0.04, 0.0])
+            self._place_object(colour, shape, object_xy, table_z)
+            self._frame(np.vstack([keypoints.reshape(-1, 3), [[*object_xy, table_z]], self._table_corners()]))
             label = source if shape is None else f"{source} ({colour} {shape})"
             self.gui_title.content = f"**{label}**"
             self._apply()
         self._notify()
 
+    def _table_corners(self) -> np.ndarray:
+        centre, size = np.asarray(self.table.position), np.asarray(self.table.dimensions)
+        return np.array([centre + size * (sx, sy, 0) / 2 for sx in (-1, 1) for sy in (-1, 1)])
+
+    def _frame(self, points: np.ndarray) -> None:
+        """Point every camera (new clients' and the open ones') at the box around `points`: the
+        arm over the whole recording, the table and the object."""
+        low, high = points.min(axis=0), points.max(axis=0)
+        centre, radius = (low + high) / 2, float(np.linalg.norm(high - low)) / 2
+        position = centre + CAMERA_DIRECTION / np.linalg.norm(CAMERA_DIRECTION) * radius * 1.8
+        cameras = [self.server.initial_camera, *(c.camera for c in self.server.get_clients().values())]
+        for camera in cameras:
+            camera.position = tuple(float(v) for v in position)
+            camera.look_at = tuple(float(v) for v in centre)
+
     def seek(self, t: float) -> None:
+        """Move the cursor to `t` seconds (clamped to the recording)."""
+        t = _finite(t, "the time")
         with self._lock:
             self.cursor.t = float(np.clip(t, 0.0, self.cursor.duration_s))
             self._apply()
@@ -220,8 +233,10 @@ class SceneViewer:
         self._notify()
 
     def set_speed(self, speed: float) -> None:
+        """Replay at `speed` times real time (clamped to `SPEEDS`)."""
+        speed = _finite(speed, "the speed")
         with self._lock:
-            self.cursor.speed = float(np.clip(speed, 0.05, 8.0))
+            self.cursor.speed = float(np.clip(speed, *SPEEDS))
         self._notify()
 
     def state(self) -> dict:
@@ -229,7 +244,7 @@ class SceneViewer:
             return asdict(self.cursor)
 
     def _apply(self) -> None:
-        """Move the arm to the cursor's time step and the 3D view's controls to the cursor."""
+        """Move the arm to the cursor's time step."""
         if self._keypoints is None:
             return
         step = min(int(round(self.cursor.t * self._fps)), len(self._keypoints) - 1)
@@ -239,13 +254,6 @@ class SceneViewer:
             link.wxyz = _x_to(b - a)
         for handle, p in zip(self.joints, kp, strict=True):
             handle.position = tuple(float(v) for v in p)
-        self._updating_gui = True
-        try:
-            self.gui_time.max = max(self.cursor.duration_s, 0.05)
-            self.gui_time.value = round(self.cursor.t, 2)
-            self.gui_speed.value = self.cursor.speed
-        finally:
-            self._updating_gui = False
 
     # listeners (the page's WebSocket)
     def subscribe(self, listener: Callable[[dict], None]) -> Callable[[], None]:
@@ -286,4 +294,23 @@ class SceneViewer:
     def close(self) -> None:
         self._stop.set()
         self._thread.join(timeout=1.0)
-        self.server.stop()
+        with _quiet():
+            self.server.stop()
+
+
+def _finite(value: float, what: str) -> float:
+    """`value` as a float, or ValueError when it is not a finite number (NaN would stop playback)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number):
+        raise ValueError(f"{what} must be a finite number, not {value!r}")
+    return number
+
+
+@contextlib.contextmanager
+def _quiet() -> Iterator[None]:
+    """Keep viser's console output (its banner, "Server stopped") out of the app's console."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield

@@ -41,6 +41,7 @@ from lesson_world import build, load_world  # noqa: E402
 
 TINY_DATA = "tests.model.tiny_data:tiny_sequence_set"
 JOBS_ROUTERS = ("jobs", "results")
+TEST_CLIENT_HOST = "testserver"  # the Host header of fastapi.testclient.TestClient
 
 
 def explorer(root: Path, **overrides: object) -> Settings:
@@ -55,14 +56,22 @@ def lesson_world(root: Path, **overrides: object) -> tuple[Settings, CorpusLoade
 
 def jobs_settings(root: Path, **overrides: object) -> Settings:
     """A jobs-only app's settings: run store and models folder under `root`, the tiny scene set."""
-    base = Settings(run_dir=root / "runs", models_dir=root / "models", job_data=TINY_DATA, viser=False)
+    base = Settings(
+        run_dir=root / "runs",
+        models_dir=root / "models",
+        user_dir=root / "user",
+        job_data=TINY_DATA,
+        viser=False,
+    )
     return dataclasses.replace(base, **overrides)
 
 
 def build_app(
     settings: Settings, load_corpus: CorpusLoader = Corpus.load, routers: Sequence[str] | None = None
 ) -> FastAPI:
-    """The app of `settings` (all its routers, or the named ones)."""
+    """The app of `settings` (all its routers, or the named ones); it also answers the Host name
+    of Starlette's TestClient (``testserver``)."""
+    settings = dataclasses.replace(settings, allowed_hosts=(*settings.allowed_hosts, TEST_CLIENT_HOST))
     return create_app(settings, load_corpus, routers)
 
 
@@ -125,7 +134,12 @@ def serve_jobs_app(
     root: Path, figures_dir: Path | None = None
 ) -> AbstractContextManager[tuple[str, subprocess.Popen]]:
     """The jobs-only app (run store and models under `root`) in its own process."""
-    env = {**os.environ, "MTRNN_RUN_DIR": str(root / "runs"), "MTRNN_MODELS_DIR": str(root / "models")}
+    env = {
+        **os.environ,
+        "MTRNN_RUN_DIR": str(root / "runs"),
+        "MTRNN_MODELS_DIR": str(root / "models"),
+        "MTRNN_USER_DIR": str(root / "user"),
+    }
     if figures_dir is not None:
         env["MTRNN_FIGURES_DIR"] = str(figures_dir)
     args = [

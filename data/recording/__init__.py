@@ -12,8 +12,9 @@ A recording is either
 interpolation, frames by nearest frame) or raises `RecordingError` with a message that names the
 problem. `write_zip` and `write_npz` write the format atomically. The full description, with the
 
-The package: `format` (the dataclass, the error, the limits), `read` (the two layouts), `joints`
-(joints.csv and the 20 Hz grid), `frames` (images and video), `write`.
+The package: `format` (the dataclass, the error, the limits), `read` (the zip layout, and which
+layout a file is), `archive` (the zip container: member checks, reading), `npz` (the npz layout),
+`joints` (joints.csv and the 20 Hz grid), `frames` (images and video), `write`.
 """
 
 from data.recording.format import (
@@ -23,14 +24,20 @@ from data.recording.format import (
     IMAGE_SUFFIXES,
     LIMIT_TOLERANCE,
     MAX_COMPRESSION_RATIO,
+    MAX_CSV_LINE_BYTES,
+    MAX_FPS,
     MAX_FRAME_BYTES,
     MAX_HEIGHT,
+    MAX_JOINT_ROWS,
     MAX_MEMBERS,
+    MAX_META_BYTES,
     MAX_STEPS,
     MAX_UNCOMPRESSED_BYTES,
     MAX_UPLOAD_BYTES,
     MAX_UTTERANCE_CHARS,
+    MAX_VIDEO_FRAMES,
     MAX_WIDTH,
+    MIN_FPS,
     MIN_SIDE,
     MIN_STEPS,
     VIDEO_NAMES,
@@ -49,14 +56,20 @@ __all__ = [
     "IMAGE_SUFFIXES",
     "LIMIT_TOLERANCE",
     "MAX_COMPRESSION_RATIO",
+    "MAX_CSV_LINE_BYTES",
+    "MAX_FPS",
     "MAX_FRAME_BYTES",
     "MAX_HEIGHT",
+    "MAX_JOINT_ROWS",
     "MAX_MEMBERS",
+    "MAX_META_BYTES",
     "MAX_STEPS",
     "MAX_UNCOMPRESSED_BYTES",
     "MAX_UPLOAD_BYTES",
     "MAX_UTTERANCE_CHARS",
+    "MAX_VIDEO_FRAMES",
     "MAX_WIDTH",
+    "MIN_FPS",
     "MIN_SIDE",
     "MIN_STEPS",
     "VIDEO_NAMES",

@@ -23,9 +23,14 @@ MAX_UNCOMPRESSED_BYTES = 400 * 1024**2  # sum of the archive members' uncompress
 MAX_COMPRESSION_RATIO = 500  # for members larger than BOMB_MIN_MEMBER_BYTES (deflate tops out ~1030)
 BOMB_MIN_MEMBER_BYTES = 50 * 1024**2
 MAX_MEMBERS = 5000
-MAX_FRAME_BYTES = 1024**3  # decoded frames on the 20 Hz grid
 MIN_STEPS = 20  # 1 s at 20 Hz
 MAX_STEPS = 600  # 30 s at 20 Hz
+MAX_FRAME_BYTES = MAX_STEPS * 640 * 480 * 3  # decoded frames on the 20 Hz grid: 30 s of 640 x 480 (527 MiB)
+MAX_JOINT_ROWS = 60_000  # rows of joints.csv (30 s at 2 kHz), counted while reading
+MAX_CSV_LINE_BYTES = 4096  # one row of joints.csv (six numbers need ~150)
+MAX_META_BYTES = 64 * 1024  # meta.json
+MAX_VIDEO_FRAMES = 20 * MAX_STEPS  # frames a video may hold (30 s at 400 fps), from its header
+MIN_FPS, MAX_FPS = 0.01, 10_000.0  # a rate given in meta.json or the .npz
 MIN_SIDE = 32  # pixels
 MAX_WIDTH, MAX_HEIGHT = 1920, 1080  # either orientation
 LIMIT_TOLERANCE = 0.02  # rad; angles this close outside a limit are clipped to it
@@ -74,14 +79,31 @@ class Recording:
 def check_frame_array(frames: object, what: str) -> None:
     if not isinstance(frames, np.ndarray):
         raise RecordingError(f"{what} must be a numpy array, got {type(frames).__name__}")
-    if frames.dtype != np.uint8:
+    check_frame_shape(frames.shape, frames.dtype, what)
+
+
+def check_frame_shape(shape: tuple[int, ...], dtype: np.dtype, what: str) -> None:
+    """Frames of this shape and dtype are T x H x W x 3 uint8 of an accepted size (checked from an
+    array's header, before its data is read)."""
+    if dtype != np.uint8:
         raise RecordingError(
-            f"{what} must be uint8 RGB (0..255), got dtype {frames.dtype}; convert with "
+            f"{what} must be uint8 RGB (0..255), got dtype {dtype}; convert with "
             "(frames * 255).clip(0, 255).astype(np.uint8) if they are floats in [0, 1]"
         )
-    if frames.ndim != 4 or frames.shape[3] != 3:
-        raise RecordingError(f"{what} must have shape T x H x W x 3 (RGB), got {frames.shape}")
-    check_size(frames.shape[2], frames.shape[1], what)
+    if len(shape) != 4 or shape[3] != 3:
+        raise RecordingError(f"{what} must have shape T x H x W x 3 (RGB), got {tuple(shape)}")
+    check_size(shape[2], shape[1], what)
+
+
+def check_fps(fps: object, where: str) -> float:
+    """A frame rate as a float in [MIN_FPS, MAX_FPS]."""
+    if isinstance(fps, bool) or not isinstance(fps, int | float) or not math.isfinite(fps) or fps <= 0:
+        raise RecordingError(f"{where}: fps must be a positive number, got {fps!r}")
+    if not MIN_FPS <= fps <= MAX_FPS:
+        raise RecordingError(
+            f"{where}: fps must be from {MIN_FPS:g} to {MAX_FPS:g} frames per second, got {fps!r}"
+        )
+    return float(fps)
 
 
 def check_size(width: int, height: int, what: str) -> None:
@@ -94,3 +116,12 @@ def check_size(width: int, height: int, what: str) -> None:
             f"{what} is {width}x{height} pixels; frames may be at most {MAX_WIDTH}x{MAX_HEIGHT} "
             "(320x240 is what the corpus uses)"
         )
+
+
+def check_utterance(value: object, where: str) -> str:
+    """The utterance a teacher said, as given in meta.json or the .npz: a string, not too long."""
+    if not isinstance(value, str):
+        raise RecordingError(f"{where}: utterance must be a string, got {type(value).__name__} {value!r}")
+    if len(value) > MAX_UTTERANCE_CHARS:
+        raise RecordingError(f"{where}: utterance has {len(value)} characters; at most {MAX_UTTERANCE_CHARS}")
+    return value.strip()

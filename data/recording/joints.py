@@ -1,35 +1,56 @@
-"""joints.csv and the time grid: parsing and validating the joint table, the 20 Hz grid with its
-length limits, resampling onto it, and the NAO joint limits every recording must keep."""
+"""joints.csv and the time grid: parsing (streamed, rows counted while reading) and validating the
+joint table, the 20 Hz grid with its length limits, resampling onto it, and the NAO joint limits
+every recording must keep."""
 
 from __future__ import annotations
 
 import csv
 import io
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from typing import IO
 
 import numpy as np
 
 from data.nao import JOINT_LIMITS, JOINT_NAMES
-from data.recording.format import CSV_HEADER, LIMIT_TOLERANCE, MAX_STEPS, MIN_STEPS, RecordingError
+from data.recording.format import (
+    CSV_HEADER,
+    LIMIT_TOLERANCE,
+    MAX_CSV_LINE_BYTES,
+    MAX_JOINT_ROWS,
+    MAX_STEPS,
+    MIN_STEPS,
+    RecordingError,
+)
 from data.world import FPS
 
 
-def parse_joints_csv(raw: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """Times [N] in seconds and angles [N, 5] in radians (JOINT_NAMES order), validated."""
-    rows = _csv_rows(raw)
-    header = _check_header(rows[0])
+def parse_joints_csv(source: bytes | IO[bytes]) -> tuple[np.ndarray, np.ndarray]:
+    """Times [N] in seconds and angles [N, 5] in radians (JOINT_NAMES order), validated.
+
+    `source` is read line by line: the rows are counted (at most MAX_JOINT_ROWS) and each line's
+    length is bounded (MAX_CSV_LINE_BYTES) while reading, so a huge table is refused early."""
+    stream = io.BytesIO(source) if isinstance(source, bytes | bytearray) else source
+    rows = _csv_rows(stream)
+    first = next(rows, None)
+    if first is None:
+        raise RecordingError("joints.csv is empty; its first line must be the header " + ",".join(CSV_HEADER))
+    header = _check_header(first)
     order = [header.index(c) for c in CSV_HEADER]
-    body = rows[1:]
-    if not body:
-        raise RecordingError("joints.csv has a header but no data rows")
-    values = np.empty((len(body), len(CSV_HEADER)), dtype=np.float64)
-    for r, row in enumerate(body):
+    body: list[list[float]] = []
+    for r, row in enumerate(rows):
         line = r + 2
+        if r == MAX_JOINT_ROWS:
+            raise RecordingError(
+                f"joints.csv has more than {MAX_JOINT_ROWS} rows; resample it to at most "
+                f"{MAX_JOINT_ROWS // 30} Hz (the model reads 20 Hz)"
+            )
         if len(row) != len(header):
             raise RecordingError(f"joints.csv line {line} has {len(row)} values; expected {len(header)}")
-        for j, col in enumerate(order):
-            values[r, j] = _cell_value(row[col].strip(), line, CSV_HEADER[j])
+        body.append([_cell_value(row[col].strip(), line, CSV_HEADER[j]) for j, col in enumerate(order)])
+    if not body:
+        raise RecordingError("joints.csv has a header but no data rows")
+    values = np.array(body, dtype=np.float64)
     times = values[:, 0]
     steps = np.diff(times)
     if np.any(steps <= 0):
@@ -42,16 +63,31 @@ def parse_joints_csv(raw: bytes) -> tuple[np.ndarray, np.ndarray]:
     return times, joints
 
 
-def _csv_rows(raw: bytes) -> list[list[str]]:
-    """The non-blank rows of joints.csv (UTF-8, with or without a byte-order mark); at least one."""
+def _csv_rows(stream: IO[bytes]) -> Iterator[list[str]]:
+    """The non-blank rows of joints.csv (UTF-8, with or without a byte-order mark), read lazily."""
+    reader = csv.reader(_lines(stream))
     try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise RecordingError("joints.csv is not UTF-8 text") from exc
-    rows = [r for r in csv.reader(io.StringIO(text)) if any(cell.strip() for cell in r)]
-    if not rows:
-        raise RecordingError("joints.csv is empty; its first line must be the header " + ",".join(CSV_HEADER))
-    return rows
+        for row in reader:
+            if any(cell.strip() for cell in row):
+                yield row
+    except csv.Error as exc:
+        raise RecordingError(f"joints.csv line {reader.line_num} cannot be read as CSV ({exc})") from None
+
+
+def _lines(stream: IO[bytes]) -> Iterator[str]:
+    """The lines of `stream` as text, none longer than MAX_CSV_LINE_BYTES."""
+    number = 0
+    while line := stream.readline(MAX_CSV_LINE_BYTES + 1):
+        number += 1
+        if len(line) > MAX_CSV_LINE_BYTES:
+            raise RecordingError(
+                f"joints.csv line {number} is longer than {MAX_CSV_LINE_BYTES} bytes; "
+                "a row holds six numbers: t and the five joint angles"
+            )
+        try:
+            yield line.decode("utf-8-sig" if number == 1 else "utf-8")
+        except UnicodeDecodeError:
+            raise RecordingError("joints.csv is not UTF-8 text") from None
 
 
 def _check_header(first: list[str]) -> list[str]:
@@ -93,7 +129,13 @@ def _is_number(cell: str) -> bool:
 
 
 def time_grid(t0: float, t1: float) -> np.ndarray:
-    """The 20 Hz grid over [t0, t1], with the length checks."""
+    """The 20 Hz grid over [t0, t1], with the length checks (made before the grid is built)."""
+    span = float(t1) - float(t0)  # Python floats: inf on overflow, without a warning
+    if not math.isfinite(span) or span * FPS > 2 * MAX_STEPS:
+        raise RecordingError(
+            f"the recording is too long: its time stamps run from {t0:g} s to {t1:g} s; "
+            f"at most {MAX_STEPS / FPS:g} s ({MAX_STEPS} steps) is accepted"
+        )
     steps = int(math.floor((t1 - t0) * FPS + 1e-6)) + 1
     if steps < MIN_STEPS:
         raise RecordingError(

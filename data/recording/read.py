@@ -1,41 +1,36 @@
 """Reading format v1: bytes or a file -> a `Recording` on the 20 Hz grid, or a `RecordingError`.
 
-`read_recording` checks the file's size and the archive's members (unsafe paths, decompression
-bombs) before anything is decompressed, then reads the zip layout (joints.csv, meta.json and
-frames; `data.recording.joints` and `data.recording.frames` parse those) or the npz layout.
+`read_recording` checks the file's size and the archive's members (unsafe paths, encryption,
+decompression bombs) before anything is decompressed, then reads the zip
+layout (joints.csv, meta.json and frames; `data.recording.joints` and `data.recording.frames`
+parse those) or the npz layout (`data.recording.npz`).
 """
 
 from __future__ import annotations
 
-import io
 import json
-import math
 import re
 import zipfile
-import zlib
 from pathlib import Path
 
-import cv2
-import numpy as np
-from PIL import Image
-
-from data.nao import JOINT_NAMES
+from data.recording.archive import open_archive, open_member, read_member
 from data.recording.format import (
     BOMB_MIN_MEMBER_BYTES,
     IMAGE_SUFFIXES,
     MAX_COMPRESSION_RATIO,
     MAX_MEMBERS,
+    MAX_META_BYTES,
     MAX_UNCOMPRESSED_BYTES,
     MAX_UPLOAD_BYTES,
-    MAX_UTTERANCE_CHARS,
     VIDEO_NAMES,
     Recording,
     RecordingError,
-    check_frame_array,
-    check_size,
+    check_fps,
+    check_utterance,
 )
-from data.recording.frames import check_memory, frame_times, nearest_frames, read_video
-from data.recording.joints import check_limits, parse_joints_csv, resample_joints, time_grid
+from data.recording.frames import read_images, read_video
+from data.recording.joints import parse_joints_csv, resample_joints, time_grid
+from data.recording.npz import is_npz, read_npz
 from data.world import FPS
 
 _IGNORED = re.compile(r"(^|/)(__MACOSX/|\.DS_Store$|Thumbs\.db$)")
@@ -63,19 +58,11 @@ def read_recording(source: bytes | Path, filename: str) -> Recording:
             f"{name} is not a recording: expected a .zip (joints.csv + frames) or a .npz "
             "(joints, frames arrays)"
         )
-    try:
-        archive = zipfile.ZipFile(io.BytesIO(data))
-    except (zipfile.BadZipFile, zlib.error, EOFError, OSError) as exc:
-        raise RecordingError(f"corrupt archive: {name} cannot be opened as a zip/npz ({exc})") from exc
-    with archive:
+    with open_archive(data, name) as archive:
         members = _check_members(archive, name)
-        if any(m.filename.endswith(".npy") for m in members) and not any(
-            m.filename.endswith("joints.csv") for m in members
-        ):
-            rec = _read_npz(data, name)
-        else:
-            rec = _read_zip(archive, members, name)
-    return rec
+        if is_npz(members):
+            return read_npz(archive, members, name)
+        return _read_zip(archive, members, name)
 
 
 def _read_source(source: bytes | Path, filename: str) -> bytes:
@@ -102,7 +89,8 @@ def _too_big(name: str, size: int) -> str:
 
 
 def _check_members(archive: zipfile.ZipFile, name: str) -> list[zipfile.ZipInfo]:
-    """Reject unsafe member paths and decompression bombs before anything is decompressed."""
+    """Reject unsafe member paths, encrypted members and decompression bombs before anything is
+    decompressed; the members that matter (folders and OS clutter left out)."""
     infos = [i for i in archive.infolist() if not i.is_dir() and not _IGNORED.search(i.filename)]
     if not infos:
         raise RecordingError(f"{name} is an empty archive: it holds no files")
@@ -114,6 +102,11 @@ def _check_members(archive: zipfile.ZipFile, name: str) -> list[zipfile.ZipInfo]
             raise RecordingError(
                 f"{name} contains the unsafe path {info.filename!r}: member paths must be relative "
                 "and must not contain '..'"
+            )
+        if info.flag_bits & 0x1:
+            raise RecordingError(
+                f"{name}: member {info.filename!r} is encrypted (password-protected); "
+                "save the recording as a plain zip without a password"
             )
     total = sum(i.file_size for i in infos)
     if total > MAX_UNCOMPRESSED_BYTES:
@@ -131,23 +124,14 @@ def _check_members(archive: zipfile.ZipFile, name: str) -> list[zipfile.ZipInfo]
     return infos
 
 
-def _read_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str) -> bytes:
-    try:
-        return archive.read(info)
-    except (zipfile.BadZipFile, zlib.error, EOFError, OSError, NotImplementedError) as exc:
-        raise RecordingError(f"corrupt archive: {info.filename!r} in {name} cannot be read ({exc})") from exc
-
-
-# ------------------------------------------------------------------------------------------ zip layout
-
-
 def _read_zip(archive: zipfile.ZipFile, infos: list[zipfile.ZipInfo], name: str) -> Recording:
     by_name = {i.filename.replace("\\", "/"): i for i in infos}
     prefix = _layout_prefix(by_name, name)
     files = {k[len(prefix) :]: v for k, v in by_name.items() if k.startswith(prefix)}
 
-    times, joints = parse_joints_csv(_read_member(archive, files["joints.csv"], name))
-    meta = _parse_meta(_read_member(archive, files["meta.json"], name)) if "meta.json" in files else {}
+    with open_member(archive, files["joints.csv"], name) as stream:
+        times, joints = parse_joints_csv(stream)
+    meta = _parse_meta(archive, files["meta.json"], name) if "meta.json" in files else {}
     grid = time_grid(times[0], times[-1])
     joints = resample_joints(times, joints, grid)
 
@@ -159,10 +143,10 @@ def _read_zip(archive: zipfile.ZipFile, infos: list[zipfile.ZipInfo], name: str)
         found = ", ".join(videos + (["frames/"] if images else []))
         raise RecordingError(f"{name} holds more than one set of frames ({found}); keep exactly one")
     if videos:
-        data = _read_member(archive, files[videos[0]], name)
-        frames = read_video(data, videos[0], grid, times, meta.get("fps"))
+        with open_member(archive, files[videos[0]], name) as stream:
+            frames = read_video(stream, videos[0], grid, times, meta.get("fps"))
     elif images:
-        frames = _read_images(archive, [files[k] for k in images], name, grid, times, meta.get("fps"))
+        frames = read_images(archive, [files[k] for k in images], name, grid, times, meta.get("fps"))
     else:
         raise RecordingError(
             f"{name} has no camera frames: add video.mp4 (or video.avi) or images frames/*.png|jpg"
@@ -170,9 +154,17 @@ def _read_zip(archive: zipfile.ZipFile, infos: list[zipfile.ZipInfo], name: str)
     return Recording(joints=joints, frames=frames, fps=FPS, utterance=meta.get("utterance"))
 
 
-def _natural_key(name: str) -> list[tuple[int, int | str]]:
-    """Name order with numbers compared as numbers: frame2.png before frame10.png."""
-    return [(0, int(part)) if part.isdigit() else (1, part) for part in re.split(r"(\d+)", name) if part]
+def _natural_key(name: str) -> list[tuple[int, int, str]]:
+    """Name order with numbers compared as numbers: frame2.png before frame10.png (by length, then
+    digits, leading zeros dropped, so that a number of any length compares without converting it)."""
+    key = []
+    for part in re.split(r"(\d+)", name):
+        if part.isdigit():
+            digits = part.lstrip("0")
+            key.append((0, len(digits), digits))
+        elif part:
+            key.append((1, 0, part))
+    return key
 
 
 def _layout_prefix(by_name: dict[str, zipfile.ZipInfo], name: str) -> str:
@@ -186,156 +178,26 @@ def _layout_prefix(by_name: dict[str, zipfile.ZipInfo], name: str) -> str:
     raise RecordingError(f"{name} has no joints.csv at its top level (it holds: {listing})")
 
 
-def _parse_meta(raw: bytes) -> dict:
+def _parse_meta(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str) -> dict:
+    """The keys of meta.json this format uses (utterance, fps), checked; its size is bounded first."""
+    if info.file_size > MAX_META_BYTES:
+        raise RecordingError(
+            f"meta.json is {info.file_size} bytes; at most {MAX_META_BYTES // 1024} KiB are accepted "
+            '(it holds only {"utterance": ..., "fps": ...})'
+        )
     try:
-        meta = json.loads(raw.decode("utf-8-sig"))
+        meta = json.loads(read_member(archive, info, name).decode("utf-8-sig"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise RecordingError(f"meta.json is not valid JSON ({exc})") from exc
+    except RecursionError:
+        raise RecordingError("meta.json is nested too deeply; it must be a flat JSON object") from None
     if not isinstance(meta, dict):
         raise RecordingError(
             f'meta.json must be a JSON object like {{"utterance": ...}}, got {type(meta).__name__}'
         )
     out: dict = {}
     if meta.get("utterance") is not None:
-        out["utterance"] = _check_utterance(meta["utterance"], "meta.json")
+        out["utterance"] = check_utterance(meta["utterance"], "meta.json")
     if meta.get("fps") is not None:
-        fps = meta["fps"]
-        if isinstance(fps, bool) or not isinstance(fps, int | float) or not math.isfinite(fps) or fps <= 0:
-            raise RecordingError(f"meta.json: fps must be a positive number, got {fps!r}")
-        out["fps"] = float(fps)
+        out["fps"] = check_fps(meta["fps"], "meta.json")
     return out
-
-
-def _check_utterance(value: object, where: str) -> str:
-    if not isinstance(value, str):
-        raise RecordingError(f"{where}: utterance must be a string, got {type(value).__name__} {value!r}")
-    if len(value) > MAX_UTTERANCE_CHARS:
-        raise RecordingError(f"{where}: utterance has {len(value)} characters; at most {MAX_UTTERANCE_CHARS}")
-    return value.strip()
-
-
-def _read_images(
-    archive: zipfile.ZipFile,
-    infos: list[zipfile.ZipInfo],
-    name: str,
-    grid: np.ndarray,
-    times: np.ndarray,
-    fps: float | None,
-) -> np.ndarray:
-    size: tuple[int, int] | None = None
-    blobs: list[bytes] = []
-    for info in infos:
-        blob = _read_member(archive, info, name)
-        try:
-            with Image.open(io.BytesIO(blob)) as image:  # reads the header only
-                this = image.size
-        except (OSError, Image.DecompressionBombError, ValueError):
-            raise RecordingError(f"{info.filename} is not a decodable PNG/JPEG image") from None
-        if size is None:
-            check_size(*this, info.filename)
-            check_memory(len(grid), *this)
-            size = this
-        elif this != size:
-            raise RecordingError(
-                f"{info.filename} is {this[0]}x{this[1]} but the first frame is {size[0]}x{size[1]}; "
-                "all frames must have the same size"
-            )
-        blobs.append(blob)
-    picks = nearest_frames(
-        grid, frame_times(len(blobs), times[0], times[-1], fps), "frames/", times[-1] - times[0]
-    )
-    decoded: dict[int, np.ndarray] = {}
-    for i in np.unique(picks):
-        bgr = cv2.imdecode(np.frombuffer(blobs[i], np.uint8), cv2.IMREAD_COLOR)
-        if bgr is None:
-            raise RecordingError(f"{infos[i].filename} cannot be decoded as an image")
-        decoded[int(i)] = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-    return np.stack([decoded[int(i)] for i in picks])
-
-
-# ---------------------------------------------------------------------------------------- npz layout
-
-
-def _read_npz(data: bytes, name: str) -> Recording:
-    arrays = _npz_arrays(data, name)
-    joints = _npz_joints(arrays["joints"], name)
-    frames = arrays["frames"]
-    check_frame_array(frames, f"{name}: frames")
-    if len(frames) != len(joints):
-        raise RecordingError(
-            f"{name}: joints have {len(joints)} steps but frames have {len(frames)}; "
-            "there must be one frame per joint sample"
-        )
-    fps = _npz_fps(arrays["fps"], name) if "fps" in arrays else FPS
-    utterance = _npz_utterance(arrays["utterance"], name) if "utterance" in arrays else None
-    times = np.arange(len(joints)) / fps
-    joints = check_limits(joints, lambda i: f"step {i} (t = {times[i]:g} s)")
-    grid = time_grid(0.0, times[-1])
-    if fps != FPS:
-        joints = resample_joints(times, joints, grid)
-        frames = frames[nearest_frames(grid, times, name, times[-1])]
-    return Recording(joints=joints, frames=np.ascontiguousarray(frames), fps=FPS, utterance=utterance)
-
-
-def _npz_arrays(data: bytes, name: str) -> dict[str, np.ndarray]:
-    """The arrays a .npz recording may hold (joints and frames required), never unpickling."""
-    try:
-        npz = np.load(io.BytesIO(data), allow_pickle=False)
-    except (ValueError, OSError, zipfile.BadZipFile, zlib.error, EOFError) as exc:
-        raise RecordingError(f"corrupt archive: {name} cannot be read as .npz ({exc})") from exc
-    with npz:
-        keys = list(npz.files)
-        for key in ("joints", "frames"):
-            if key not in keys:
-                raise RecordingError(
-                    f"{name} has no {key!r} array (it holds: {', '.join(keys) or 'nothing'}); "
-                    "a .npz recording needs joints (T x 5) and frames (T x H x W x 3)"
-                )
-        return {k: _npz_array(npz, k, name) for k in ("joints", "frames", "fps", "utterance") if k in keys}
-
-
-def _npz_joints(joints: np.ndarray, name: str) -> np.ndarray:
-    """The joints array as T x 5 finite float64 radians."""
-    if joints.dtype.kind not in "fiu":
-        raise RecordingError(f"{name}: joints must be numbers (float radians), got dtype {joints.dtype}")
-    if joints.ndim != 2 or joints.shape[1] != len(JOINT_NAMES):
-        raise RecordingError(
-            f"{name}: joints must have shape T x {len(JOINT_NAMES)} ({', '.join(JOINT_NAMES)}), "
-            f"got {joints.shape}"
-        )
-    joints = joints.astype(np.float64)
-    if not np.all(np.isfinite(joints)):
-        i, j = np.argwhere(~np.isfinite(joints))[0]
-        raise RecordingError(
-            f"{name}: joints[{i}, {j}] ({JOINT_NAMES[j]}) is {joints[i, j]}, not a finite number"
-        )
-    return joints
-
-
-def _npz_fps(value: np.ndarray, name: str) -> float:
-    if value.size != 1 or value.dtype.kind not in "fiu" or not np.isfinite(value).all() or float(value) <= 0:
-        raise RecordingError(f"{name}: fps must be one positive number, got {value!r}")
-    return float(value.reshape(()))
-
-
-def _npz_utterance(value: np.ndarray, name: str) -> str:
-    if value.dtype.kind not in "US" or value.size != 1:
-        raise RecordingError(
-            f"{name}: utterance must be a single string, got an array of dtype {value.dtype}"
-        )
-    text = value.reshape(()).item()
-    return _check_utterance(text.decode("utf-8") if isinstance(text, bytes) else text, name)
-
-
-def _npz_array(npz: np.lib.npyio.NpzFile, key: str, name: str) -> np.ndarray:
-    try:
-        return npz[key]
-    except ValueError as exc:
-        if "allow_pickle" in str(exc):
-            raise RecordingError(
-                f"{name}: array {key!r} holds Python objects (a pickle), which are never loaded for safety; "
-                "store numbers as numeric arrays and text as a plain string (np.savez(..., utterance='...'))"
-            ) from None
-        raise RecordingError(f"corrupt archive: array {key!r} in {name} cannot be read ({exc})") from exc
-    except (OSError, zipfile.BadZipFile, zlib.error, EOFError) as exc:
-        raise RecordingError(f"corrupt archive: array {key!r} in {name} cannot be read ({exc})") from exc

@@ -188,10 +188,12 @@ def uniform(shape: tuple[int, ...], scale: float, generator: torch.Generator) ->
 
 
 class ProgressReporter:
-    """Collects history and calls `progress` every `every` epochs and at the last one."""
+    """Collects history and calls `progress` every `every` epochs and at the last one. While a stage
+    restarts from new weights (end_to_end's generator), `attempt` = (n, of) joins the reports."""
 
     def __init__(self, progress: ProgressFn | None, every: int, history: list[dict]) -> None:
         self.progress, self.every, self.history = progress, max(1, every), history
+        self.attempt: tuple[int, int] | None = None
 
     def __call__(self, stage: str, epoch: int, epochs: int, loss: float, csc: Tensor | None = None) -> None:
         if epoch % self.every and epoch != epochs:
@@ -200,6 +202,8 @@ class ProgressReporter:
         self.history.append(entry)
         if self.progress is not None:
             report = dict(entry)
+            if self.attempt is not None:
+                report["attempt"], report["attempts"] = self.attempt
             if csc is not None:
                 report["csc"] = csc.detach().tolist()
             self.progress(report)

@@ -1,12 +1,20 @@
 """`mtrnn describe RECORDING [--json]`: what the served model says about a recording file.
 
-The same code path as ``POST /api/describe``, so the answer is the same.
+The same code path as ``POST /api/describe``, so the answer is the same. It loads only what
+describing needs, the model and its lexicon, not the corpus (whose words are read only for a
+model whose meta.json has no lexicon). The answer goes to stdout; errors and logs to stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from server.services.describe import DescribeService
+    from server.settings import Settings
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -17,30 +25,43 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+def _error(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def describer(settings: Settings) -> DescribeService:
+    """The describe service over the settings' models, with no corpus scenes to serve."""
+    from data.corpus import Corpus as Recordings
+    from server.services.corpus import Corpus
+    from server.services.describe import DescribeService
+    from server.services.errors import Unavailable
+    from server.services.models import ModelRegistry
+
+    no_scenes = Corpus(Recordings(entries=[], seed=0))
+    try:
+        models = ModelRegistry(settings.models_dir, [], settings.model, None)
+    except Unavailable:  # a model without a lexicon of its own speaks the corpus's words
+        models = ModelRegistry.serving(settings, Corpus.load(settings))
+    return DescribeService(no_scenes, models)
+
+
 def run(args: argparse.Namespace) -> int:
     from data.recording import MAX_UPLOAD_BYTES, RecordingError
     from server.routes.describe import description_of
-    from server.services.corpus import Corpus
-    from server.services.describe import DescribeService
-    from server.services.models import ModelRegistry
     from server.settings import Settings
 
     settings = Settings.from_env(model=args.model, viser=False)
-    corpus = Corpus.load(settings)
-    models = ModelRegistry.serving(settings, corpus)
     try:
         data = args.recording.read_bytes()
     except OSError as exc:
-        print(f"error: {exc}")
-        return 2
+        return _error(str(exc))
     if len(data) > MAX_UPLOAD_BYTES:
-        print(f"error: {args.recording} is larger than the limit of {MAX_UPLOAD_BYTES} bytes")
-        return 2
+        return _error(f"{args.recording} is larger than the limit of {MAX_UPLOAD_BYTES} bytes")
     try:
-        up = DescribeService(corpus, models).describe_upload(data, args.recording.name)
-    except RecordingError as exc:
-        print(f"error: {exc}")
-        return 2
+        up = describer(settings).describe_upload(data, args.recording.name)
+    except (RecordingError, FileNotFoundError) as exc:  # a bad recording, or no model to serve
+        return _error(str(exc))
     answer = description_of(up.result, up.id, "upload", up.model)
     if args.json:
         print(answer.model_dump_json(indent=1))

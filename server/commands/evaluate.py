@@ -4,9 +4,11 @@
     mtrnn evaluate --mode faithful --folds 2 --inits 1 --engine ray --set training.epochs_auditory=50
     mtrnn evaluate --mode peer --folds 10 --inits 10 --engine ray --address ray://head:10001 --json
 
-Results go to the run store in --run-dir (default: `Settings.run_dir`, $MTRNN_RUN_DIR or runs/);
-running the same command again skips every finished run, so a killed evaluation is resumed by
-repeating it.
+Results go to the run store in --run-dir (default: `Settings.run_dir`, $MTRNN_RUN_DIR or runs/;
+the app's own evaluations keep theirs apart, in its user folder); running the same command again
+skips every finished run, so a killed evaluation is resumed by repeating it. `--epochs-scale`
+multiplies every epoch count the mode reads (`server.jobs.presets.scale_epochs`), before --set.
+A progress bar over the runs shows the time left on stderr.
 """
 
 from __future__ import annotations
@@ -48,6 +50,12 @@ def add_assignments(parser: argparse.ArgumentParser, flag: str, dest: str, text:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("evaluate", help="K folds x N inits of one training mode (resumable)")
     parser.add_argument("--mode", required=True, help="faithful, end_to_end or peer")
+    parser.add_argument(
+        "--epochs-scale",
+        type=float,
+        default=1.0,
+        help="multiply every epoch count of the mode (0.1: the Jobs page's quick preset)",
+    )
     add_engine_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -95,12 +103,16 @@ def load_data(corpus_path: Path | None) -> Any:
     return load_corpus(corpus_path).training_data()
 
 
-def build_config(overrides: dict[str, Any], mode: str = "faithful") -> dict[str, Any]:
+def build_config(
+    overrides: dict[str, Any], mode: str = "faithful", epochs_scale: float = 1.0
+) -> dict[str, Any]:
+    """The mode's defaults, every epoch count times `epochs_scale`, then `overrides`."""
     from model.experiments.protocol import apply_overrides, default_config
+    from server.jobs.presets import scale_epochs
 
     try:
-        return apply_overrides(default_config(mode), overrides)
-    except KeyError as err:
+        return apply_overrides(scale_epochs(default_config(mode), mode, epochs_scale), overrides)
+    except (KeyError, ValueError) as err:
         raise SystemExit(f"error: {err.args[0]}") from None
 
 
@@ -114,7 +126,8 @@ def with_progress(store: Any, specs: list, run: Callable[[Any], Any]) -> Any:
 
 
 def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
-    bar = tqdm(total=total, initial=already, unit="run", file=sys.stderr)
+    """A bar over the runs (those of an earlier try counted), with the time left."""
+    bar = tqdm(total=total, initial=already, desc="runs", unit="run", file=sys.stderr)
 
     def update(event: dict) -> None:
         bar.update(1)
@@ -128,7 +141,7 @@ def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
 def run(args: argparse.Namespace) -> int:
     from model.experiments.protocol import data_digest, plan, run_protocol, summarise
 
-    config = build_config(parse_overrides(args.overrides), args.mode)
+    config = build_config(parse_overrides(args.overrides), args.mode, args.epochs_scale)
     data = load_data(args.corpus)
     store = run_store(args.run_dir)
     specs = plan("evaluate", args.mode, args.folds, args.inits, config, data_digest(data), args.seed)

@@ -1,10 +1,17 @@
-"""`mtrnn train`: train one MultiMTRNN on one fold of the corpus and save it as a checkpoint."""
+"""`mtrnn train`: train one model on one fold of the corpus and save it as a checkpoint.
+
+    mtrnn train --mode end_to_end --out models/quick --epochs-scale 0.1
+
+`--epochs-scale` multiplies every epoch count the mode reads (`server.jobs.presets.scale_epochs`:
+faithful's stages, end_to_end's options, peer's epochs). A progress bar per stage (and per attempt
+of a stage that restarts) shows its epochs, loss and time left on stderr."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import logging
+import sys
 from pathlib import Path
 
 from tqdm import tqdm
@@ -17,12 +24,17 @@ logger = logging.getLogger(__name__)
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("train", help="train one model on one fold (50:50 by scene) and save it")
     parser.add_argument(
-        "--mode", default="faithful", help="training mode: faithful (the paper) or end_to_end"
+        "--mode", default="faithful", help="training mode: faithful (the paper), end_to_end or peer"
     )
     parser.add_argument("--fold", type=int, default=0, help="which 50:50 split by scene")
     parser.add_argument("--seed", type=int, default=0, help="random initialisation")
     parser.add_argument("--out", type=Path, required=True, help="checkpoint directory to write")
-    parser.add_argument("--epochs-scale", type=float, default=1.0, help="multiply every stage's epochs")
+    parser.add_argument(
+        "--epochs-scale",
+        type=float,
+        default=1.0,
+        help="multiply every epoch count of the mode (0.1: the Jobs page's quick preset)",
+    )
     parser.add_argument("--corpus", type=Path, default=None, help="corpus .npz (default: the shipped one)")
     add_assignments(
         parser,
@@ -35,9 +47,49 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=_train)
 
 
+def _config(args: argparse.Namespace) -> dict:
+    """The mode's default config, its --option values and its epochs scaled; ValueError if bad."""
+    from model.experiments.protocol import default_config
+    from server.jobs.presets import scale_epochs
+
+    try:
+        options = parse_assignments(args.option)
+    except ValueError as err:
+        raise ValueError(f"--option takes KEY=VALUE, got {err.args[0]!r}") from None
+    config = default_config(args.mode)
+    if options:
+        if "options" not in config:
+            raise ValueError(f"mode {args.mode} has no named options")
+        config["options"] = options
+    return scale_epochs(config, args.mode, args.epochs_scale)
+
+
+class StageBars:
+    """One tqdm bar per stage (and per attempt of a restarted stage) on stderr: epochs, loss, ETA."""
+
+    def __init__(self) -> None:
+        self.key: tuple | None = None
+        self.bar: tqdm | None = None
+
+    def __call__(self, report: dict) -> None:
+        key = (report["stage"], report.get("attempt"))
+        if key != self.key:
+            self.close()
+            desc = report["stage"]
+            if report.get("attempt"):
+                desc += f" (attempt {report['attempt']} of {report['attempts']})"
+            self.key, self.bar = key, tqdm(total=report["epochs"], desc=desc, unit="epoch", file=sys.stderr)
+        assert self.bar is not None
+        self.bar.update(report["epoch"] - self.bar.n)
+        self.bar.set_postfix(loss=f"{report['loss']:.4g}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def _train(args: argparse.Namespace) -> int:
     from data.corpus import load_corpus
-    from model.config import MultiMTRNNConfig
     from model.experiments.evaluation import run_once
     from model.training import MODES
 
@@ -45,38 +97,21 @@ def _train(args: argparse.Namespace) -> int:
         print(f"error: unknown mode {args.mode!r}; available: {', '.join(sorted(MODES))}")
         return 2
     try:
+        config = _config(args)
         corpus = load_corpus(args.corpus)
-    except FileNotFoundError as err:
+    except (FileNotFoundError, ValueError) as err:
         print(f"error: {err}")
         return 2
-    config = MultiMTRNNConfig()
-    config.training = config.training.scaled(args.epochs_scale)
+    bars = StageBars()
     try:
-        config.options = parse_assignments(args.option)
-    except ValueError as err:
-        print(f"error: --option takes KEY=VALUE, got {err.args[0]!r}")
-        return 2
-    data = corpus.training_data()
-
-    bars: dict[str, tqdm] = {}
-
-    def progress(report: dict) -> None:
-        stage = report["stage"]
-        if stage not in bars:
-            for bar in bars.values():
-                bar.close()
-            bars[stage] = tqdm(total=report["epochs"], desc=stage, unit="epoch")
-        bar = bars[stage]
-        bar.update(report["epoch"] - bar.n)
-        bar.set_postfix(loss=f"{report['loss']:.4g}")
-
-    try:
-        result = run_once(data, args.mode, args.fold, args.seed, config, out_dir=args.out, progress=progress)
+        result = run_once(
+            corpus.training_data(), args.mode, args.fold, args.seed, config, out_dir=args.out, progress=bars
+        )
     except ValueError as err:  # e.g. an unknown --option
         print(f"error: {err}")
         return 2
-    for bar in bars.values():
-        bar.close()
+    finally:
+        bars.close()
     if args.json:
         print(json.dumps(result.metrics, indent=2))
     else:

@@ -1,18 +1,27 @@
 """The kinds of job the app runs: what each validates, where it runs and what it does.
 
-    train     one model (`model.experiments.evaluation.run_once`), saved to the models folder
+    train     one model (`model.experiments.evaluation.run_once`), saved to the app's own models
+              folder (`<user_dir>/models`, beside none of the shipped ones)
     evaluate  K folds x N initialisations of one mode (`model.experiments.protocol.run_protocol`)
+              into the app's own run store (`<user_dir>/runs`, not the one `mtrnn report` reads)
     cosine    the cosine experiment of 3.2.2 for one psi, live in lesson 5 (`train_cosine_once`)
+
+A job's config is its mode's defaults, scaled by its epoch preset (`presets`), then its overrides,
+every key and value checked before it is queued (`bounds`).
 
 Train and evaluate run in a child process and are kept in the jobs table; a cosine run is small,
 runs in a thread of the server and is kept in memory (a run is deterministic in (psi, seed), so
 asking for it again returns the kept one). Events a job sends (its kind's shapes):
 
     {"type": "status", "status": "running"}
-    {"type": "progress", "stage", "epoch", "epochs", "loss", "points": [[pc1, pc2], ...], "labels": [...]}
-    {"type": "run", "done", "total", "failed", "seconds", "metrics"}       (evaluate)
+    {"type": "progress", "stage", "epoch", "epochs", "loss", "eta", "seconds",
+     "points": [[pc1, pc2], ...], "labels": [...]}                       ("attempt", "attempts" too
+                                                                           while a stage restarts)
+    {"type": "run", "done", "total", "failed", "seconds", "eta", "metrics"}  (evaluate)
     {"type": "progress", "epoch", "loss", "frame": {...}, "seconds"}         (cosine)
     {"type": "done", "result": {...}}  /  {"type": "error", "error": "..."}
+
+"eta" is the seconds left (of the stage, or of the evaluation) at the pace so far, None at first.
 """
 
 from __future__ import annotations
@@ -20,6 +29,7 @@ from __future__ import annotations
 import importlib
 import json
 import math
+import os
 import secrets
 import threading
 import time
@@ -30,10 +40,13 @@ from typing import Any
 
 import numpy as np
 
-from model.experiments.protocol import apply_overrides, default_config
+from model.experiments.protocol import default_config
 from model.metrics import CscPCA
+from server.jobs.bounds import check_overrides
+from server.jobs.presets import PRESETS, scale_epochs
 from server.lessons.abstracting import snapshot
 from server.services.errors import Invalid
+from server.services.models import user_models
 from server.settings import Settings
 
 TRAIN_MODES = ("faithful", "end_to_end")  # modes the app can serve (checkpoints of a MultiMTRNN)
@@ -48,24 +61,54 @@ def corpus_data(corpus_path: str | None = None) -> Any:
     return load_corpus(Path(corpus_path) if corpus_path else None).training_data()
 
 
+def user_runs(settings: Settings) -> Path:
+    """The run store of the app's evaluation jobs."""
+    return settings.user_dir / "runs"
+
+
 def _config(params: dict) -> dict:
-    try:
-        return apply_overrides(default_config(params["mode"]), params.get("overrides") or {})
-    except KeyError as err:
-        raise Invalid(str(err.args[0])) from None
+    """The job's mode's defaults, scaled by its preset, with its overrides (all checked)."""
+    mode = params["mode"]
+    base = default_config(mode)
+    if params.get("preset"):
+        base = scale_epochs(base, mode, PRESETS[params["preset"]].scale)
+    return check_overrides(mode, params.get("overrides") or {}, base)
+
+
+class _Pace:
+    """Seconds left at the pace so far: `eta(done, total)` for one stage (or one evaluation)."""
+
+    def __init__(self) -> None:
+        self.first: tuple[float, float] | None = None
+
+    def eta(self, done: float, total: float) -> float | None:
+        now = time.monotonic()
+        if self.first is None:
+            self.first = (now, done)
+            return None
+        t0, d0 = self.first
+        if done <= d0:
+            return None
+        return round((now - t0) / (done - d0) * max(0.0, total - done), 1)
 
 
 # --- train ------------------------------------------------------------------------------------------
 
 
 class _ProgressRelay:
-    """Training progress -> events, with the PCA of the Csc patterns being shaped."""
+    """Training progress -> events, with the PCA of the Csc patterns being shaped and the time
+    left in the stage (a restarted stage, a new attempt, starts its own pace)."""
 
     def __init__(self, emit: Emit, labels: list[str]) -> None:
         self.emit, self.labels = emit, labels
+        self.started = time.monotonic()
+        self.paces: dict[tuple, _Pace] = {}
 
     def __call__(self, report: dict) -> None:
         event = {"type": "progress", **{k: v for k, v in report.items() if k != "csc"}}
+        pace = self.paces.setdefault((report["stage"], report.get("attempt")), _Pace())
+        event["eta"] = pace.eta(report["epoch"], report["epochs"])
+        event["seconds"] = round(time.monotonic() - self.started, 1)
         csc = report.get("csc")
         if csc is not None:
             x = np.asarray(csc, dtype=np.float64)
@@ -76,15 +119,12 @@ class _ProgressRelay:
 
 
 def validate_train(params: dict, job_id: str, settings: Settings) -> dict:
+    """The checked params of a training job, with its model's name (the manager checks it is free)."""
     if params.get("mode") not in TRAIN_MODES:
         raise Invalid(f"a training job needs mode in {TRAIN_MODES}, got {params.get('mode')!r}")
     _config(params)
     fold, seed = params.get("fold", 0), params.get("seed", 0)
-    name = params.get("name") or f"{params['mode']}-f{fold}-s{seed}-{job_id[-6:]}"
-    if not name.replace("-", "").replace("_", "").isalnum():
-        raise Invalid(f"model name {name!r}: use letters, digits, '-' and '_' only")
-    if (settings.models_dir / name).exists():
-        raise Invalid(f"a model named {name!r} exists already")
+    name = params.get("name") or f"{params['mode'].replace('_', '-')}-f{fold}-s{seed}-{job_id[-6:]}"
     return {**params, "job_id": job_id, "name": name}
 
 
@@ -97,15 +137,17 @@ def run_train(params: dict, emit: Emit, data: Any, settings: Settings) -> dict:
     fold, seed, out = (
         int(params.get("fold", 0)),
         int(params.get("seed", 0)),
-        settings.models_dir / params["name"],
+        user_models(settings) / params["name"],
     )
     train_idx, _ = fold_split(data.ids, fold, seed=0)
     labels = [parse_slots(data.utterances[i])["action"] or "?" for i in train_idx]
     run = run_once(data, params["mode"], fold, seed, _config(params), out, _ProgressRelay(emit, labels))
     meta_path = out / checkpoint.META
     meta = {**json.loads(meta_path.read_text()), "job": params.get("job_id")}
-    meta_path.write_text(json.dumps(meta, indent=2, sort_keys=True))
-    return {"model": params["name"], "path": str(out), "metrics": run.metrics}
+    partial = meta_path.with_suffix(".partial")
+    partial.write_text(json.dumps(meta, indent=2, sort_keys=True))
+    os.replace(partial, meta_path)  # atomic: the registry never reads half a meta.json
+    return {"model": params["name"], "metrics": run.metrics}
 
 
 # --- evaluate ---------------------------------------------------------------------------------------
@@ -114,9 +156,6 @@ def run_train(params: dict, emit: Emit, data: Any, settings: Settings) -> dict:
 def validate_evaluate(params: dict, job_id: str, settings: Settings) -> dict:
     if params.get("mode") not in EVALUATE_MODES:
         raise Invalid(f"an evaluation job needs mode in {EVALUATE_MODES}, got {params.get('mode')!r}")
-    for key in ("folds", "inits"):
-        if int(params.get(key, 0)) < 1:
-            raise Invalid(f"an evaluation job needs {key} >= 1")
     _config(params)
     return {**params, "job_id": job_id}
 
@@ -129,10 +168,14 @@ def run_evaluate(params: dict, emit: Emit, data: Any, settings: Settings) -> dic
     folds, inits, seed = int(params["folds"]), int(params["inits"]), int(params.get("seed", 0))
     specs = plan("evaluate", params["mode"], folds, inits, _config(params), data_digest(data), seed)
 
-    def relay(event: dict) -> None:
-        emit({"type": "run", **{k: event[k] for k in ("done", "total", "failed", "seconds", "metrics")}})
+    store = RunStore(user_runs(settings))
+    pace = _Pace()
+    pace.eta(len(store.done_keys([s.key for s in specs])), len(specs))  # runs of an earlier try count
 
-    store = RunStore(settings.run_dir)
+    def relay(event: dict) -> None:
+        keys = ("done", "total", "failed", "seconds", "metrics")
+        emit({"type": "run", **{k: event[k] for k in keys}, "eta": pace.eta(event["done"], event["total"])})
+
     result = run_protocol(data, specs, store, "local", int(params.get("workers", 1)), progress=relay)
     return {
         "runs": len(result.runs),

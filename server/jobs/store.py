@@ -1,4 +1,4 @@
-"""The jobs table of the app: its own SQLite file in the run directory (`<run_dir>/jobs.sqlite`).
+"""The jobs table of the app: its own SQLite file in the app's folder (`<user_dir>/jobs.sqlite`).
 
 One row per training or evaluation job, so that the Jobs page lists them after a server restart;
 a job that was running when the server stopped is marked "interrupted" by the next one.
@@ -17,6 +17,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from server.jobs.events import finite
+
 DB_NAME = "jobs.sqlite"
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -34,23 +36,17 @@ CREATE TABLE IF NOT EXISTS jobs (
 INTERRUPTED = "the server stopped while this job was running"
 
 
-def _plain(value: Any) -> Any:
-    """numpy scalars and arrays as JSON numbers and lists."""
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
-
-
 def _json(value: Any) -> str:
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), default=_plain)
+    """Strict JSON: numpy values as numbers and lists, NaN and infinities as null."""
+    return json.dumps(finite(value), sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
 class JobStore:
     """Rows of the jobs table; every write is one transaction."""
 
-    def __init__(self, run_dir: Path) -> None:
-        run_dir.mkdir(parents=True, exist_ok=True)
-        self.path = run_dir / DB_NAME
+    def __init__(self, folder: Path) -> None:
+        folder.mkdir(parents=True, exist_ok=True)
+        self.path = folder / DB_NAME
         self._lock = threading.Lock()
         with self._db() as db:
             db.executescript(SCHEMA)

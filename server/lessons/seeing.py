@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import base64
+import io
 import time
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from model.encoding.vision import SECTORS, VISUAL_FEATURES, VisionParams, pipeline_steps
 from server.lessons import rounded
-from server.services.errors import Invalid, ServiceError
+from server.services.errors import Invalid, ServiceError, TooLarge
 
 FEATURE_NAMES = [f"d{k + 1}" for k in range(SECTORS)] + ["R", "G", "B", "centroid x", "centroid y"]
 MAX_IMAGE_WIDTH = 640  # uploads are scaled down to this width before the pipeline
+MAX_IMAGE_SIDE = 4096  # pixels; checked from the header, before decoding
 
 
 def _data_url(image: np.ndarray) -> str:
@@ -29,11 +32,33 @@ def _data_url(image: np.ndarray) -> str:
     return f"data:image/{kind};base64," + base64.b64encode(buf.tobytes()).decode("ascii")
 
 
+def image_size(data: bytes) -> tuple[int, int]:
+    """(width, height) from the picture's header alone (PIL's lazy open reads no pixel data)."""
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            return image.size
+    except Image.DecompressionBombError:
+        raise TooLarge(
+            f"the picture has more than {2 * Image.MAX_IMAGE_PIXELS / 1e6:.0f} million pixels; "
+            f"at most {MAX_IMAGE_SIDE} pixels a side are accepted"
+        ) from None
+    except (OSError, ValueError, SyntaxError):
+        raise Invalid("the upload is not an image that can be read (PNG, JPEG, BMP, ...)") from None
+
+
 def decode_image(data: bytes) -> np.ndarray:
-    """Uploaded bytes (PNG, JPEG, ...) -> RGB uint8, scaled down to at most MAX_IMAGE_WIDTH wide."""
+    """Uploaded bytes (PNG, JPEG, ...) -> RGB uint8, scaled down to at most MAX_IMAGE_WIDTH wide.
+
+    The size is checked from the header before decoding (at most MAX_IMAGE_SIDE pixels a side),
+    and the picture is decoded as stored (EXIF orientation ignored), so it has the header's size."""
     if not data:
         raise Invalid("the uploaded file is empty")
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    width, height = image_size(data)
+    if max(width, height) > MAX_IMAGE_SIDE:
+        raise TooLarge(
+            f"the picture is {width} x {height} pixels; at most {MAX_IMAGE_SIDE} pixels a side are accepted"
+        )
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
     if image is None:
         raise Invalid("the upload is not an image OpenCV can read (PNG, JPEG, BMP, ...)")
     if image.shape[1] > MAX_IMAGE_WIDTH:

@@ -156,8 +156,9 @@ def cosine_run(
 
 @router.get("/abstracting/sweep", response_model=Sweeps)
 def sweep(settings: SettingsDep) -> Sweeps:
-    """Lesson 5: the stored psi_s and cosine sweeps of the protocol's run store ($MTRNN_RUN_DIR)."""
-    return Sweeps(**stored_sweeps(settings.run_dir))
+    """Lesson 5: the stored psi_s and cosine sweeps of the protocol's run store ($MTRNN_RUN_DIR), else
+    of the shipped report ($MTRNN_FIGURES_DIR/results.json)."""
+    return Sweeps(**stored_sweeps(settings.run_dir, settings.figures_dir))
 
 
 @router.get("/associating", response_model=Association, responses=ERRORS)

@@ -9,10 +9,12 @@ from fastapi import APIRouter, Query, Response
 
 from data.nao import JOINT_NAMES
 from data.world import FPS
-from server.deps import CorpusDep, DescribeDep, ModelsDep
+from model.metrics import sentence_exact
+from server.deps import CorpusDep, DescribeDep, ModelsDep, SurveyDep
 from server.schemas.scenes import RecordingDetail, SceneList, SceneSummary
 from server.services.corpus import frame_jpeg
 from server.services.models import LoadedModel
+from server.services.survey import Survey
 
 router = APIRouter(prefix="/api/scenes", tags=["scenes"])
 
@@ -24,8 +26,11 @@ def rows(array: Any, digits: int = 5) -> list[list[float]]:
     return [[round(float(v), digits) for v in row] for row in array]
 
 
-def summary_of(served: LoadedModel, entry: Any) -> SceneSummary:
+def summary_of(served: LoadedModel, entry: Any, survey: Survey | None) -> SceneSummary:
+    """A corpus recording's labels, its split for the served model and what that model says about
+    it (from `survey`, the served model's; None while it is not ready)."""
     frames = len(entry.joints)
+    said = survey.said(entry.id) if survey is not None else None
     return SceneSummary(
         id=entry.id,
         scene=entry.scene.id,
@@ -37,6 +42,8 @@ def summary_of(served: LoadedModel, entry: Any) -> SceneSummary:
         split=served.split_of(entry.id),  # type: ignore[arg-type]
         frames=frames,
         duration_s=frames / FPS,
+        said=said,
+        correct=None if said is None else sentence_exact(said, entry.utterance),
     )
 
 
@@ -50,6 +57,7 @@ def _matches(s: SceneSummary, filters: dict[str, Any], q: str | None) -> bool:
 def list_scenes(
     corpus: CorpusDep,
     models: ModelsDep,
+    survey: SurveyDep,
     action: Annotated[str | None, Query(description="pull, push, show me or slide")] = None,
     colour: Annotated[str | None, Query(description="blue, green, red or yellow")] = None,
     shape: Annotated[str | None, Query(description="apple, banana, dice or phone")] = None,
@@ -67,7 +75,9 @@ def list_scenes(
         "split": split or None,
     }
     served = models.served
-    out = [s for e in corpus.entries.values() if _matches(s := summary_of(served, e), filters, q)]
+    surveyed = survey.ready(served.name)  # never waits for the survey
+    entries = corpus.entries.values()
+    out = [s for e in entries if _matches(s := summary_of(served, e, surveyed), filters, q)]
     return SceneList(total=len(out), scenes=out)
 
 
@@ -98,10 +108,11 @@ def recording_detail(
 
 
 @router.get("/{rid}", response_model=RecordingDetail)
-def get_scene(corpus: CorpusDep, models: ModelsDep, rid: str) -> RecordingDetail:
+def get_scene(corpus: CorpusDep, models: ModelsDep, survey: SurveyDep, rid: str) -> RecordingDetail:
     entry = corpus.entry(rid)
     series = (entry.joints, entry.proprioception, entry.vision)
-    return recording_detail(entry.id, "corpus", series, entry.utterance, summary_of(models.served, entry))
+    summary = summary_of(models.served, entry, survey.ready(models.served.name))
+    return recording_detail(entry.id, "corpus", series, entry.utterance, summary)
 
 
 @router.get(

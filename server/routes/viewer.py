@@ -1,17 +1,26 @@
 """The 3D viewer: its shared time cursor (GET/POST /api/viewer, WS /api/viewer/ws) and viser's client,
-served on the app's origin (GET /viser/) with its WebSocket proxied (WS /viser)."""
+served on the app's origin (GET /viser/) with its WebSocket proxied (WS /viser).
+
+The proxy passes viser's messages to the client unchanged, and from the client only the ones the
+page needs (`CLIENT_MESSAGES`: its camera); everything else a client could send viser (GUI
+values, a share-URL request that would open a public tunnel, file uploads) is dropped. viser
+frames each client message as one msgpack map whose ``type`` names its message class
+(`viser.infra._messages.Message.deserialize`). Only the app's own pages reach the proxy
+(`server.guard` checks the Origin of every WebSocket).
+"""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 from pathlib import Path
 
+import msgspec
 import viser
 import websockets
 from fastapi import APIRouter, HTTPException, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import FileResponse
+from pydantic import ValidationError
 from starlette.concurrency import run_in_threadpool
 
 from data.scenario import scene_from_utterance
@@ -25,6 +34,8 @@ from server.viewer import SceneViewer
 router = APIRouter(tags=["viewer"])
 
 VISER_CLIENT = Path(viser.__file__).resolve().parent / "client" / "build" / "index.html"
+CLIENT_MESSAGES = frozenset({"ViewerCameraMessage"})  # what the page's 3D view sends viser
+MAX_CLIENT_MESSAGE = 16 * 1024  # a camera message is ~300 bytes
 
 
 def _viewer(services: Services) -> SceneViewer:
@@ -80,6 +91,16 @@ async def command_viewer(services: ServicesDep, cmd: ViewerCommand) -> ViewerSta
     return _state(services)
 
 
+async def _command(ws: WebSocket, services: Services, text: str) -> None:
+    """Run one command of the page's WebSocket; a bad one is answered ``{"detail": ...}``."""
+    try:
+        await command_viewer(services, ViewerCommand.model_validate_json(text))
+    except ValidationError as exc:
+        await ws.send_json({"detail": "; ".join(e["msg"] for e in exc.errors())})
+    except (ValueError, ServiceError, HTTPException) as exc:
+        await ws.send_json({"detail": str(getattr(exc, "detail", exc))})
+
+
 @router.websocket("/api/viewer/ws")
 async def viewer_socket(ws: WebSocket) -> None:
     """Pushes the cursor on every change; accepts the same commands as POST /api/viewer."""
@@ -108,13 +129,23 @@ async def viewer_socket(ws: WebSocket) -> None:
     task = asyncio.create_task(sender())
     try:
         while True:
-            cmd = ViewerCommand(**json.loads(await ws.receive_text()))
-            await command_viewer(services, cmd)
-    except (WebSocketDisconnect, ValueError, HTTPException, ServiceError):
+            await _command(ws, services, await ws.receive_text())
+    except WebSocketDisconnect:
         pass
     finally:
         unsubscribe()
         task.cancel()
+
+
+def passes(data: bytes) -> bool:
+    """Whether a client's message to viser is one the page needs (`CLIENT_MESSAGES`)."""
+    if len(data) > MAX_CLIENT_MESSAGE:
+        return False
+    try:
+        message = msgspec.msgpack.decode(data)
+    except msgspec.DecodeError:
+        return False
+    return isinstance(message, dict) and message.get("type") in CLIENT_MESSAGES
 
 
 @router.get("/viser/", include_in_schema=False)
@@ -156,10 +187,9 @@ async def viser_proxy(ws: WebSocket) -> None:
             message = await ws.receive()
             if message["type"] == "websocket.disconnect":
                 return
-            if message.get("bytes") is not None:
-                await upstream.send(message["bytes"])
-            elif message.get("text") is not None:
-                await upstream.send(message["text"])
+            data = message.get("bytes")
+            if data is not None and passes(data):
+                await upstream.send(data)
 
     tasks = [asyncio.create_task(down()), asyncio.create_task(up())]
     try:

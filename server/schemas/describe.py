@@ -6,6 +6,8 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from server.schemas.timeline import Timeline
+
 
 class Timings(BaseModel):
     read_ms: float = Field(0.0, description="parsing the uploaded file")
@@ -34,3 +36,8 @@ class Description(BaseModel):
     target_activity: list[list[float]] | None = Field(description="[T_a][|B|] encoded expected utterance")
     csc: CscVectors
     timings: Timings
+    timeline: Timeline | None = Field(None, description="uploads: what the model would say at every step")
+    warnings: list[str] = Field(
+        default_factory=list,
+        description="what could not be compared: words of the expected utterance outside the lexicon, ...",
+    )

@@ -14,6 +14,14 @@ class SceneSummary(SceneLabels):
     split: Split = Field(description="whether the served model was trained on this scene")
     frames: int = Field(description="time steps at 20 fps")
     duration_s: float
+    said: str | None = Field(
+        description="what the served model says about this recording (from its Csc survey); "
+        "null while the survey is not ready"
+    )
+    correct: bool | None = Field(
+        description="whether it said the teacher's sentence (model.metrics.sentence_exact); "
+        "null while the survey is not ready"
+    )
 
 
 class SceneList(BaseModel):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 
 class ViewerState(BaseModel):
@@ -15,7 +15,9 @@ class ViewerState(BaseModel):
 
 
 class ViewerCommand(BaseModel):
-    show: str | None = Field(default=None, description="recording id or upload id to show")
+    model_config = ConfigDict(allow_inf_nan=False)  # NaN or infinity: 422, never the cursor
+
+    show: str | None = Field(default=None, max_length=200, description="recording id or upload id to show")
     t: float | None = Field(default=None, ge=0.0, description="move the time cursor (seconds)")
     playing: bool | None = None
     speed: float | None = Field(default=None, gt=0.0, le=8.0)

@@ -1,9 +1,11 @@
 """The one model registry: the model folders the app can serve, each loaded once, one of them served.
 
 A model folder holds `model.safetensors` and `meta.json` (`model.checkpoint`). The registry finds
-the folders under `settings.models_dir`, loads a model the first time it is asked for, knows which
-one is served, and reads each model's training and test recordings from its meta with one rule
-(`split_ids`). Finished training jobs add their folder (`register`).
+the folders under `settings.models_dir` (the shipped models) and then under the app's own
+`settings.user_dir / "models"` (models trained in the app; a name shipped already is skipped),
+loads a model the first time it is asked for, knows which one is served, and reads each model's
+training and test recordings from its meta with one rule (`split_ids`). Finished training jobs
+add their folder (`register`).
 """
 
 from __future__ import annotations
@@ -60,6 +62,11 @@ class LoadedModel:
         return "unknown"
 
 
+def user_models(settings: Settings) -> Path:
+    """The app's own models folder: where its training jobs save their models."""
+    return settings.user_dir / "models"
+
+
 def discover(root: Path) -> dict[str, Path]:
     """Model folders under `root` (those with a meta.json), by name, in name order."""
     if not root.is_dir():
@@ -71,9 +78,19 @@ class ModelRegistry:
     """The models of one app. `lock` serialises calls into a model (describe, generate)."""
 
     def __init__(
-        self, models_dir: Path, corpus_ids: list[str], preferred: str, corpus_lexicon: Lexicon | None
+        self,
+        models_dir: Path,
+        corpus_ids: list[str],
+        preferred: str,
+        corpus_lexicon: Lexicon | None,
+        user_models_dir: Path | None = None,
     ) -> None:
-        self.dirs = discover(models_dir)
+        self.dirs = discover(models_dir)  # shipped first, then the app's own
+        for name, path in discover(user_models_dir).items() if user_models_dir else ():
+            if name in self.dirs:
+                logger.warning("model %s in %s has the name of a shipped model: skipped", name, path)
+            else:
+                self.dirs[name] = path
         if not self.dirs:
             raise FileNotFoundError(
                 f"no model under {models_dir} (expected <name>/model.safetensors + meta.json); "
@@ -86,8 +103,10 @@ class ModelRegistry:
 
     @classmethod
     def serving(cls, settings: Settings, corpus: Corpus) -> ModelRegistry:
-        """The registry of the settings' models folder over `corpus`, serving `settings.model` first."""
-        return cls(settings.models_dir, list(corpus.entries), settings.model, corpus.lexicon)
+        """The registry of the shipped and the app's models over `corpus`, serving `settings.model` first."""
+        return cls(
+            settings.models_dir, list(corpus.entries), settings.model, corpus.lexicon, user_models(settings)
+        )
 
     def _load(self, name: str) -> LoadedModel:
         with self.lock:

@@ -52,8 +52,16 @@ class Survey:
     c_a: np.ndarray  # [N, |Csc_a|] c_a,0
     spaces: dict[str, CscSpaceData] = field(default_factory=dict)  # filled by SurveyService.spaces
 
+    def __post_init__(self) -> None:
+        self._index = {rid: i for i, rid in enumerate(self.ids)}
+
     def vectors(self, space: str) -> np.ndarray:
         return {"s": self.c_s, "v": self.c_v, "a": self.c_a}[space]
+
+    def said(self, rid: str) -> str | None:
+        """What the model said about recording `rid` (None for one outside the survey)."""
+        i = self._index.get(rid)
+        return None if i is None else self.texts[i]
 
 
 def _space(x: np.ndarray, actions: list[str]) -> CscSpaceData:
@@ -82,6 +90,8 @@ class SurveyService:
         self._surveys: dict[str, Survey] = {}
         self._pcas: dict[tuple[str, str], tuple[CscPCA, np.ndarray]] = {}
         self._lock = threading.Lock()  # one survey computation at a time
+        self._started: set[str] = set()  # models whose survey `ready` has set going
+        self._starting = threading.Lock()
 
     def survey(self, name: str | None = None) -> Survey:
         """The survey of the named model (default: the served one)."""
@@ -90,6 +100,26 @@ class SurveyService:
             if lm.name not in self._surveys:
                 self._surveys[lm.name] = self._describe_all(lm)
             return self._surveys[lm.name]
+
+    def ready(self, name: str | None = None) -> Survey | None:
+        """The named model's survey (default: the served one's) if it is computed; else None, and
+        it is set going in the background once, so that a list of recordings never waits for it."""
+        lm = self.models.get(name)
+        survey = self._surveys.get(lm.name)
+        if survey is None:
+            with self._starting:
+                if lm.name not in self._started:
+                    self._started.add(lm.name)
+                    threading.Thread(
+                        target=self._survey_quietly, args=(lm.name,), name="survey", daemon=True
+                    ).start()
+        return survey
+
+    def _survey_quietly(self, name: str) -> None:
+        try:
+            self.survey(name)
+        except Exception:  # whoever asks `survey` later gets the error with its message
+            logger.exception("could not survey the corpus with model %r", name)
 
     def _describe_all(self, lm: LoadedModel) -> Survey:
         entries = list(self.corpus.entries.values())

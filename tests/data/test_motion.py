@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from data.motion import HOME_POSTURE, Motion, Teacher, generate_motion
+from data.motion import HOME_POSTURE, Motion, Teacher, generate_motion, retimed
 from data.nao import JOINT_LIMITS, forward_kinematics
 from data.scenario import ACTIONS, COLOURS, SHAPES, Scene, all_scenes
 from data.world import FPS, TABLE_Z
@@ -103,3 +103,14 @@ def test_teachers_vary_widely() -> None:
 def test_teacher_survives_a_json_round_trip() -> None:
     teacher = Teacher.sample(np.random.default_rng(4))
     assert Teacher.from_dict(json.loads(json.dumps(teacher.to_dict()))) == teacher
+
+
+def test_a_retimed_motion_keeps_its_path_at_another_speed_and_rate() -> None:
+    motion = _motion(Scene("slide", "red", "apple"), 0, 1)
+    same = retimed(motion, 1.0)
+    assert np.array_equal(same.joints, motion.joints) and np.array_equal(same.contact, motion.contact)
+    slow = retimed(motion, 2.0, fps=30.0)
+    assert slow.fps == 30.0 and len(slow.joints) == round(len(motion.joints) * 2.0 * 30.0 / FPS)
+    assert slow.duration == pytest.approx(2.0 * motion.duration, abs=2 / 30)
+    assert np.allclose(slow.joints[0], motion.joints[0]) and np.allclose(slow.joints[-1], motion.joints[-1])
+    assert slow.contact.any() == motion.contact.any()

@@ -46,7 +46,13 @@ def build_artefacts(root: Path) -> Settings:
         model = MultiMTRNN(seed=seed)
         meta = {"mode": "untrained", "seed": seed, "ids": train, "lexicon": lexicon}
         save(model, root / "models" / name, meta)
-    return Settings(models_dir=root / "models", corpus_path=corpus_path, viser=False)
+    return Settings(
+        models_dir=root / "models",
+        corpus_path=corpus_path,
+        viser=False,
+        run_dir=root / "runs",
+        user_dir=root / "user",
+    )
 
 
 @dataclass(frozen=True)

@@ -95,7 +95,13 @@ def build(root: Path) -> Settings:
             root / "models" / name,
             {"mode": mode, "seed": seed, "lexicon": lexicon, "split": {"train": train, "test": test}},
         )
-    return Settings(models_dir=root / "models", model="faithful", viser=False)
+    return Settings(
+        models_dir=root / "models",
+        model="faithful",
+        viser=False,
+        run_dir=root / "runs",
+        user_dir=root / "user",
+    )
 
 
 def load_world(settings: Settings) -> Corpus:

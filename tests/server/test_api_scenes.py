@@ -1,14 +1,22 @@
-"""GET /api/health, /api/scenes (filters), /api/scenes/{id}, frames, pages and static files."""
+"""GET /api/health, /api/scenes (filters, and what the served model says about each recording),
+/api/scenes/{id}, frames, pages and static files."""
 
 from __future__ import annotations
 
+import threading
+import time
+
 import cv2
 import numpy as np
+import pytest
 from fastapi.testclient import TestClient
 
 from data.corpus import load_corpus
 from data.nao import JOINT_NAMES
+from model.metrics import sentence_exact
+from server.services.survey import SurveyService
 from server.settings import Settings
+from tests.app_builder import build_app
 
 
 def test_health_names_the_served_model_and_corpus_size(client: TestClient, settings: Settings) -> None:
@@ -34,6 +42,50 @@ def test_scene_list_carries_metadata_and_the_models_split(client: TestClient, se
         entry.scene.shape,
     )
     assert {s["split"] for s in body["scenes"]} == {"train", "test"}
+
+
+def _surveyed(client: TestClient, timeout: float = 300.0) -> list[dict]:
+    """The scene list once the served model's survey has filled in what it says."""
+    deadline = time.monotonic() + timeout
+    while True:
+        scenes = client.get("/api/scenes").json()["scenes"]
+        if all(s["said"] is not None for s in scenes):
+            return scenes
+        assert time.monotonic() < deadline, "the survey did not finish"
+        time.sleep(0.2)
+
+
+def test_each_scene_says_what_the_served_model_says_and_whether_it_is_right(client: TestClient) -> None:
+    scenes = _surveyed(client)
+    assert all(s["correct"] is sentence_exact(s["said"], s["utterance"]) for s in scenes)
+    first = scenes[0]
+    summary = client.get(f"/api/scenes/{first['id']}").json()["summary"]
+    assert (summary["said"], summary["correct"]) == (first["said"], first["correct"])
+    described = client.post(f"/api/scenes/{first['id']}/describe").json()
+    assert described["utterance"] == first["said"]  # the survey's answer is the describe answer
+
+
+def test_the_scene_list_does_not_wait_for_the_survey(
+    settings: Settings, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    gate = threading.Event()
+    describe_all = SurveyService._describe_all
+
+    def held_back(self: SurveyService, lm: object) -> object:  # the survey, held back until the gate opens
+        gate.wait(timeout=120)
+        return describe_all(self, lm)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(SurveyService, "_describe_all", held_back)
+    with TestClient(build_app(settings)) as c:
+        try:
+            started = time.perf_counter()
+            scenes = c.get("/api/scenes").json()["scenes"]
+            assert time.perf_counter() - started < 60  # answered while the survey waits
+            assert scenes and all(s["said"] is None and s["correct"] is None for s in scenes)
+            assert c.get(f"/api/scenes/{scenes[0]['id']}").json()["summary"]["said"] is None
+        finally:
+            gate.set()
+        assert all(isinstance(s["correct"], bool) for s in _surveyed(c))
 
 
 def test_scene_filters_combine(client: TestClient) -> None:

@@ -13,7 +13,9 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
+from server.jobs.bounds import MAX_EPOCHS
 from server.jobs.manager import JobManager
+from server.settings import Settings
 from tests.app_builder import JOBS_ROUTERS, build_app, explorer, jobs_settings, serve_jobs_app
 
 TINY = {
@@ -23,11 +25,16 @@ TINY = {
     "training.epochs_assemblies": 4,
     "training.progress_every": 1,
 }
-ENDLESS = {**TINY, "training.epochs_auditory": 10_000_000}
+ENDLESS = {**TINY, "training.epochs_auditory": MAX_EPOCHS}  # the longest a job may ask for
 
 
-def _app(tmp_path: Path) -> FastAPI:
-    return build_app(jobs_settings(tmp_path), routers=JOBS_ROUTERS)
+def _settings(tmp_path: Path, **overrides: object) -> Settings:
+    """The jobs-only app's settings with its own folder (models it trains, jobs table, run store)."""
+    return jobs_settings(tmp_path, user_dir=tmp_path / "user", **overrides)
+
+
+def _app(tmp_path: Path, **overrides: object) -> FastAPI:
+    return build_app(_settings(tmp_path, **overrides), routers=JOBS_ROUTERS)
 
 
 def _events(client: TestClient, job_id: str) -> list[dict]:
@@ -67,10 +74,11 @@ def test_a_training_job_streams_progress_with_csc_points_and_saves_a_model(tmp_p
     assert events[-1]["type"] == "done" and events[-1]["status"] == "done"
     assert job["status"] == "done" and job["result"]["model"] == "tiny"
     assert set(job["result"]["metrics"]) == {"train", "test", "mixed"}
-    assert (tmp_path / "models" / "tiny" / "meta.json").is_file()
+    assert (tmp_path / "user" / "models" / "tiny" / "meta.json").is_file()
+    assert not (tmp_path / "models" / "tiny").exists()  # not beside the shipped models
     from model.checkpoint import load
 
-    model, meta = load(tmp_path / "models" / "tiny")
+    model, meta = load(tmp_path / "user" / "models" / "tiny")
     assert meta["metrics"]["test"]["n"] == 8 and len(meta["split"]["train"]) == 8
 
 
@@ -101,7 +109,10 @@ def test_a_running_job_can_be_cancelled(tmp_path) -> None:
 
 
 @pytest.mark.slow
-def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_marked(tmp_path) -> None:
+def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_marked(
+    tmp_path, monkeypatch
+) -> None:
+    monkeypatch.setenv("MTRNN_USER_DIR", str(tmp_path / "user"))
     with serve_jobs_app(tmp_path) as (base, server):
         done_id = httpx.post(
             f"{base}/api/jobs",
@@ -115,17 +126,19 @@ def test_jobs_and_models_survive_a_server_restart_and_the_interrupted_job_is_mar
         _wait(lambda: httpx.get(f"{base}/api/jobs/{live_id}", timeout=30).json()["status"] == "running", 60)
         server.send_signal(signal.SIGKILL)
         server.wait()
-    restarted = JobManager(jobs_settings(tmp_path))
+    restarted = JobManager(_settings(tmp_path))
     status = {j["id"]: j["status"] for j in restarted.list()}
+    restarted.shutdown()
     assert status == {done_id: "done", live_id: "interrupted"}
-    assert (tmp_path / "models" / "kept" / "meta.json").is_file()
+    assert (tmp_path / "user" / "jobs.sqlite").is_file()
+    assert (tmp_path / "user" / "models" / "kept" / "meta.json").is_file()
     assert restarted.get(done_id)["result"]["model"] == "kept"
 
 
 @pytest.mark.slow
 def test_a_trained_model_joins_the_apps_registry_and_can_be_served(tmp_path) -> None:
     """With the whole app: the finished job's model is listed by /api/models and selectable there."""
-    settings = explorer(tmp_path / "artefacts", run_dir=tmp_path / "runs")
+    settings = explorer(tmp_path / "artefacts", run_dir=tmp_path / "runs", user_dir=tmp_path / "user")
     with TestClient(build_app(settings)) as client:
         r = client.post(
             "/api/jobs", json={"kind": "train", "mode": "faithful", "name": "fresh", "overrides": TINY}

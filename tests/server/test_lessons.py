@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import json
 import math
 import time
 from collections.abc import Iterator
@@ -19,6 +20,7 @@ from fastapi.testclient import TestClient
 from data.scenario import Scene
 from model.experiments.runstore import RunSpec, RunStore
 from server.deps import get_settings
+from server.lessons.abstracting import stored_sweeps
 from tests.app_builder import build_app, lesson_world
 from tests.server.lesson_world import render
 
@@ -264,12 +266,23 @@ def test_an_unknown_cosine_run_is_404(client: TestClient) -> None:
     assert r.status_code == 404 and "nope" in _detail(r)
 
 
-def test_the_sweep_says_it_is_not_there_without_a_run_store(
+def test_the_sweep_says_it_is_not_there_without_a_run_store_or_a_report(tmp_path: Path) -> None:
+    body = stored_sweeps(tmp_path / "empty", tmp_path / "no-figures")
+    assert body["available"] is False and "no run store" in body["reason"]
+    assert body["psi_s"] == body["cosine"] == []
+    assert not (tmp_path / "empty").exists()  # asking never creates a store
+
+
+def test_a_fresh_clone_shows_the_sweeps_the_report_ships(
     client: TestClient, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    use_run_dir(client, tmp_path / "empty", monkeypatch)
+    use_run_dir(client, tmp_path / "empty", monkeypatch)  # no run store: runs/ is not shipped
     body = client.get("/api/lessons/abstracting/sweep").json()
-    assert body["available"] is False and "no run store" in body["reason"]
+    shipped = json.loads((client.app.state.settings.figures_dir / "results.json").read_text())
+    assert body["available"] is True and body["reason"] == ""
+    assert [r["psi_s"] for r in body["psi_s"]] == [r["psi_s"] for r in shipped["psi_s"]]
+    assert [r["mixed_f1"] for r in body["psi_s"]] == pytest.approx([r["mixed_f1"] for r in shipped["psi_s"]])
+    assert [r["psi"] for r in body["cosine"]] == [r["psi"] for r in shipped["cosine"]]
     assert not (tmp_path / "empty").exists()  # asking never creates a store
 
 

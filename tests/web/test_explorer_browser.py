@@ -1,7 +1,7 @@
 """The explorer in a real browser (Playwright + Debian chromium): what issue 4's "Done means" lists.
 
 Each test compares what the page shows with what the REST API answers, and saves a screenshot
-to docs/screenshots/ (README shows them).
+(into a temp folder; MTRNN_SCREENSHOTS=docs/screenshots retakes README's pictures).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import re
 import httpx
 import numpy as np
 import pytest
-from browser_helpers import shoot
+from browser_helpers import assert_titled, plot_titles, shoot
 from PIL import Image
 
 from data.corpus import export_recording
@@ -195,3 +195,107 @@ def test_the_header_switches_the_served_model(page, base_url: str) -> None:  # n
         page.locator("#scene-count").wait_for()  # the page was rendered again
     finally:
         httpx.put(f"{base_url}/api/models/selected", json={"name": models["selected"]}, timeout=60)
+
+
+@pytest.mark.parametrize("route", ["results", "csc?space=a", "csc?space=s", "latent"])
+def test_every_plot_says_what_it_shows(page, route: str) -> None:  # noqa: ANN001
+    page.goto(f"/#/{route}")
+    page.locator(".js-plotly-plot .main-svg").first.wait_for()
+    page.wait_for_load_state("networkidle")
+    plots = plot_titles(page)
+    assert_titled(plots)
+    by_id = {p["id"]: p for p in plots}
+    for coloured in ("csc-plot", "latent-plot", "modes-f1"):  # colours that mean something have a legend
+        if coloured in by_id:
+            assert by_id[coloured]["legend"], by_id[coloured]
+    if route == "results":
+        for metric, words in (("sentence_exact", "exact"), ("f1", "F1"), ("edit_distance", "edit distance")):
+            assert words in by_id[f"modes-{metric}"]["title"] and by_id[f"modes-{metric}"]["axes"]["yaxis"]
+    # every chart offers its numbers as a table
+    assert page.locator("figure.chart button.table-toggle").count() == len(plots)
+
+
+def test_show_as_table_lists_the_numbers_the_chart_draws(page, base_url: str) -> None:  # noqa: ANN001
+    page.goto("/#/csc?space=v")
+    page.locator("#ev-plot .main-svg").first.wait_for()
+    ev = httpx.get(f"{base_url}/api/csc?space=v", timeout=60).json()["explained_variance_ratio"]
+    button = page.locator("#ev-plot").locator("xpath=..").locator("button.table-toggle")
+    button.press("Enter")  # the keyboard opens it
+    rows = page.locator("#ev-plot-table tbody tr")
+    rows.first.wait_for()
+    assert rows.count() == len(ev)
+    assert button.get_attribute("aria-expanded") == "true"
+    first = rows.first.locator("td").all_inner_texts()
+    assert first[0] == "PC1" and float(first[1]) == pytest.approx(100 * ev[0], rel=1e-3)
+    assert "principal component" in page.locator("#ev-plot-table caption").inner_text()
+
+
+def test_the_csc_page_says_why_d_rel_is_zero(page, base_url: str) -> None:  # noqa: ANN001
+    space = httpx.get(f"{base_url}/api/csc?space=a", timeout=60).json()
+    page.goto("/#/csc?space=a")
+    page.locator("#measures").wait_for()
+    distinct = len({(f"{p['x']:.5g}", f"{p['y']:.5g}") for p in space["points"]})
+    if space["measures"]["d_rel"] >= 5e-5:
+        assert page.locator("#d-rel-note").count() == 0
+        pytest.skip("the served model's c_a,0 patterns are all distinct: nothing to explain")
+    note = page.locator("#d-rel-note").inner_text()
+    assert "64 values" in note and f"only {distinct} distinct points" in note
+
+
+def test_the_scenes_grid_shows_thumbnails_and_right_wrong_badges(page, base_url: str) -> None:  # noqa: ANN001
+    def answers() -> dict:
+        return {s["id"]: s for s in httpx.get(f"{base_url}/api/scenes", timeout=60).json()["scenes"]}
+
+    scenes = answers()
+    for _ in range(60):  # the survey warms up with the server
+        if all(s["said"] is not None for s in scenes.values()):
+            break
+        page.wait_for_timeout(1000)
+        scenes = answers()
+    page.goto("/#/scenes?action=push&colour=red")
+    cards = page.locator("#scene-grid .scene-card:visible")
+    cards.first.wait_for()
+    wanted = [s for s in scenes.values() if s["action"] == "push" and s["colour"] == "red"]
+    assert cards.count() == len(wanted) == 16
+    first = cards.first
+    page.wait_for_function(  # the camera's first and last frame, both loaded
+        "() => { const imgs = document.querySelectorAll('#scene-grid .scene-card:not([hidden]) img');"
+        " return imgs.length >= 2 && imgs[0].naturalWidth > 0 && imgs[1].naturalWidth > 0; }",
+        timeout=90_000,
+    )
+    sources = first.locator("img").evaluate_all("imgs => imgs.map((i) => i.src)")
+    rid = first.get_attribute("data-id")
+    assert sources[0].endswith(f"/api/scenes/{rid}/frames/0.jpg?width=128")
+    assert f"/frames/{scenes[rid]['frames'] - 1}.jpg" in sources[1]
+    for card in cards.all():
+        s = scenes[card.get_attribute("data-id")]
+        assert card.locator(".card-said q").inner_text() == (s["said"] or "(silence)")
+        assert card.locator(".verdict").inner_text() == ("✓ right" if s["correct"] else "✗ wrong")
+        assert card.locator(".badge").inner_text() == s["split"]
+    assert page.locator("#scene-grid .verdict.wrong:visible").count() == sum(not s["correct"] for s in wanted)
+    shoot(page, "scenes-grid", full_page=False)
+    page.locator("button[data-view=table]").click()  # the table, kept as a second view
+    page.wait_for_url(re.compile(r"view=table"))
+    assert page.locator("#scene-table tbody tr").count() == 16 and page.locator("#scene-grid").is_hidden()
+
+
+def test_an_example_uploads_and_is_described(page, base_url: str) -> None:  # noqa: ANN001
+    examples = httpx.get(f"{base_url}/api/examples", timeout=30).json()["examples"]
+    assert len(examples) >= 6
+    example = next(e for e in examples if e["kind"] == "unlike")
+    page.goto("/#/upload")
+    item = page.locator(f"#examples li[data-example='{example['name']}']")
+    item.wait_for()
+    assert page.locator("#examples li").count() == len(examples)
+    assert item.locator("a.download").get_attribute("href") == example["url"]
+    assert page.locator("#format-link").get_attribute("href").endswith("recording-format.md")
+    item.locator("button.try-example").click()
+    said = page.locator("#upload-utterance")
+    said.wait_for(timeout=120_000)
+    zipped = httpx.get(f"{base_url}{example['url']}", timeout=120).content
+    api = httpx.post(
+        f"{base_url}/api/describe", files={"recording": (f"{example['name']}.zip", zipped)}, timeout=120
+    ).json()
+    assert said.inner_text() == (api["utterance"] or "(silence)")
+    assert page.locator("#upload-preview h2").inner_text() == f"{example['name']}.zip"
+    shoot(page, "upload-example")

@@ -1,13 +1,16 @@
-"""Browser: the jobs page starts a training job and shows it live (epochs, loss, Csc PCA points
-moving), and the results page draws the report's figures with Plotly."""
+"""Browser: the jobs page starts a training job and shows it live (a progress bar, epochs, loss, Csc
+PCA points moving, every plot titled), shows a queued job's position and a restarted stage's
+attempt, and the results page draws the report's figures with Plotly."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
 
+import httpx
 import pytest
 
+from server.jobs.bounds import MAX_EPOCHS
 from tests.app_builder import serve_jobs_app
 
 pytestmark = pytest.mark.browser
@@ -37,8 +40,10 @@ def base_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """The jobs-only app (tests/app_builder.py: jobs on the tiny scene set) showing a real tiny report."""
     tmp = tmp_path_factory.mktemp("jobs-web")
     _report(tmp / "figures", tmp / "report-runs")
-    with serve_jobs_app(tmp, tmp / "figures") as (url, _):
-        yield url
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv("MTRNN_USER_DIR", str(tmp / "user"))  # the app's own models, jobs and runs
+        with serve_jobs_app(tmp, tmp / "figures") as (url, _):
+            yield url
 
 
 @pytest.fixture()
@@ -65,7 +70,46 @@ def test_the_jobs_page_trains_a_model_live_and_offers_it_to_serve(jobs_page) -> 
     page.wait_for_selector("#result-table")
     assert page.locator("#result-table tbody tr").count() == 3  # train, test, mixed
     page.wait_for_selector("tr[data-status=done] button.serve")
+    assert float(page.get_attribute("#live-progress", "value")) == 1.0
+    for plot in ("#loss-plot", "#csc-plot"):
+        titles = page.evaluate(
+            f"""(() => {{ const l = document.querySelector('{plot}').layout;
+            return [l.title.text, l.xaxis.title.text, l.yaxis.title.text]; }})()"""
+        )
+        assert all(titles), (plot, titles)
     assert not page.errors
+
+
+def test_a_job_beyond_the_running_ones_shows_its_place_in_the_queue(jobs_page, base_url: str) -> None:  # noqa: ANN001
+    page = jobs_page
+    long = {"kind": "train", "mode": "faithful", "overrides": {"training.epochs_auditory": MAX_EPOCHS}}
+    running = httpx.post(f"{base_url}/api/jobs", json=long, timeout=30).json()["id"]  # max_jobs: 1 here
+    waiting = httpx.post(f"{base_url}/api/jobs", json=long, timeout=30).json()
+    try:
+        assert waiting["status"] == "queued" and waiting["position"] == 1
+        page.goto("/#/jobs")
+        page.wait_for_selector(f"tr[data-job='{waiting['id']}'] >> text=queued, position 1")
+        page.wait_for_selector(f"tr[data-job='{running}'][data-status=running] progress")
+    finally:
+        for job_id in (waiting["id"], running):
+            httpx.post(f"{base_url}/api/jobs/{job_id}/cancel", timeout=30)
+    assert not page.errors
+
+
+def test_progress_names_the_attempt_of_a_restarted_stage_and_the_time_left(jobs_page) -> None:  # noqa: ANN001
+    page = jobs_page
+    page.goto("/#/jobs")
+    page.wait_for_selector("#job-form")
+    text = page.evaluate(
+        """import('/pages/jobs.js').then((m) => m.progressText({ status: "running", progress: {
+            type: "progress", stage: "auditory", epoch: 30, epochs: 1500, loss: 0.1,
+            attempt: 2, attempts: 3, eta: 125 } }))"""
+    )
+    assert text == "auditory, attempt 2 of 3: epoch 30/1500, loss 0.1000, about 2 min left"
+    labels = page.locator("select[name=preset] option").all_inner_texts()
+    assert len(labels) == 2 and all("about" in label for label in labels)  # measured, per mode
+    page.select_option("select[name=mode]", "faithful")
+    assert page.locator("select[name=preset] option").all_inner_texts() != labels
 
 
 def test_the_results_page_draws_the_report_figures(jobs_page) -> None:  # noqa: ANN001

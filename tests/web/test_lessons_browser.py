@@ -18,6 +18,7 @@ from pathlib import Path
 import cv2
 import httpx
 import pytest
+from browser_helpers import assert_titled, plot_titles
 
 from data.corpus import DEFAULT_PATH
 from data.scenario import Scene
@@ -151,6 +152,7 @@ def _reveal(page, lesson: str) -> None:  # noqa: ANN001
     text = page.inner_text(".lesson")
     for broken in ("null", "undefined", "NaN", "[object"):
         assert broken not in text, f"{broken!r} shown on the page"
+    assert_titled(plot_titles(page), allow_none=True)
     _shot(page, lesson)
 
 
@@ -289,6 +291,8 @@ def test_generalising_two_models_side_by_side(page) -> None:  # noqa: ANN001
     page.wait_for_function("(m) => document.getElementById('title-1').textContent.startsWith(m)", arg=current)
     page.click("#grid-0 .nsewdrag", position={"x": 30, "y": 30})
     page.wait_for_selector("#detail-0 li")
+    # the keyboard's way to a cell: its select
+    _changes(page, _text(page, "#detail-1"), lambda: page.select_option("#pick-1", index=1))
     _reveal(page, "generalising")
 
 

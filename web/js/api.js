@@ -26,6 +26,14 @@ export function withQuery(path, params) {
   return q ? `${path}?${q}` : path;
 }
 
+// A file the server sends (e.g. an example recording), as a File named `name`.
+export async function download(path, name) {
+  const response = await fetch(path);
+  if (!response.ok) await unwrap(response);
+  const blob = await response.blob();
+  return new File([blob], name, { type: blob.type });
+}
+
 export async function get(path, params) {
   return unwrap(await fetch(withQuery(path, params)));
 }

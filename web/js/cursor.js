@@ -1,5 +1,6 @@
-// The shared time cursor. With the 3D viewer running, the server owns it (WS /api/viewer/ws): the
-// viser panel's controls and this page move the same cursor. Without the viewer, a local clock.
+// The time cursor of the page's controls (play, time, speed). With the 3D viewer running, the server
+// owns it (WS /api/viewer/ws) and the 3D arm follows it; without the viewer, a local clock. The
+// socket carries the app's access cookie when there is one (same origin), like every fetch.
 
 export class Cursor {
   constructor(source, duration, fps, onChange) {
@@ -24,6 +25,7 @@ export class Cursor {
       }
       this.ws.onmessage = (ev) => {
         const s = JSON.parse(ev.data);
+        if (s.detail !== undefined) { console.warn(`3D viewer: ${s.detail}`); return; } // a refused command
         if (!s.available) { this.ws.close(); this.ws = null; fallback(); return; }
         if (!settled) {
           settled = true;

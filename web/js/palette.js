@@ -40,6 +40,9 @@ export const HIGHLIGHT = OKABE_ITO.black; // the picked recording, the probe
 export const CURSOR = OKABE_ITO.vermillion; // the shared time cursor, a moved point
 export const WHITE = "#ffffff";
 export const TRANSPARENT = "rgba(0,0,0,0)";
+// Magnitudes on a continuous scale (heatmaps of features and unit activity): perceptually uniform,
+// readable with every colour-vision deficiency and in grey.
+export const SEQUENTIAL = "Viridis";
 // Share of exact descriptions, 0 -> 1.
 export const EXACT_SCALE = [[0, OKABE_ITO.vermillion], [0.5, OKABE_ITO.yellow], [1, OKABE_ITO.bluishGreen]];
 

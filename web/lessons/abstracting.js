@@ -4,7 +4,7 @@
 import { get, post } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { CATEGORICAL, TRANSPARENT } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { plotly, chart } from "../js/plots.js";
 import { control, controls, tryThis, slider, select, num, hiddenSet } from "./common.js";
 
 const PSIS = [0, 1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2];
@@ -18,7 +18,7 @@ export const intro = [
 ];
 
 export async function render(root, ctx) {
-  const Plotly = await plotly();
+  await plotly();
   const start = PSIS.indexOf(Number(ctx.params.psi ?? 5e-5));
   const psi = slider("psi", 0, PSIS.length - 1, 1, start >= 0 ? start : 3);
   const psiValue = h("span", { class: "value", id: "psi-value" });
@@ -76,10 +76,10 @@ export async function render(root, ctx) {
       text: ["phase 0", "phase π/2", "phase π", "phase 3π/2"], textposition: "top center",
       marker: { size: 11, color: SEQ_COLOURS } };
     if (!plot.classList.contains("js-plotly-plot")) plot.replaceChildren();
-    Plotly.react(plot, [...trails, targets, points], baseLayout({
+    chart(plot, [...trails, targets, points], {
       title: { text: `Csc space, epoch ${last.epoch}`, font: { size: 13 } },
       xaxis: { title: { text: "Csc unit 1 (internal state)" }, range }, yaxis: { title: { text: "Csc unit 2" }, range, scaleanchor: "x" },
-      legend: { orientation: "h", y: -0.15 } }), CONFIG);
+      legend: { orientation: "h", y: -0.15 } });
     // while running: the latest snapshot; when done: the final abstraction (after the last epoch)
     const m = result ? { epoch: result.epochs, d_avg: result.d_avg, d_rel: result.d_rel, target_d_avg: result.target_d_avg, target_d_rel: result.target_d_rel } : last;
     readout.replaceChildren(...[
@@ -136,10 +136,10 @@ export async function render(root, ctx) {
   try {
     const sweep = await get("/api/lessons/abstracting/sweep");
     sweepBox.append(h("h2", {}, "Stored sweeps: ψ_s on the robot corpus (Fig. 9) and ψ on the cosines (Fig. 3)"));
-    const curve = (el, rows, xKey, name, title) => Plotly.react(el, [{
+    const curve = (el, rows, xKey, name, title) => chart(el, [{ name,
       x: rows.map((r) => r[xKey] || 1e-6), y: rows.map((r) => r[name]), mode: "lines+markers",
       error_y: { type: "data", array: rows.map((r) => r[`${name}_sem`] ?? 0) } }],
-    baseLayout({ title: { text: title, font: { size: 13 } }, xaxis: { title: { text: xKey === "psi" ? "ψ (0 drawn at 1e-6)" : "ψ_s" }, type: "log" }, yaxis: { title: { text: name } } }), CONFIG);
+    { title: { text: title, font: { size: 13 } }, xaxis: { title: xKey === "psi" ? "ψ (0 drawn at 1e-6)" : "ψ_s", type: "log" }, yaxis: { title: name } });
     if (sweep.psi_s.length) {
       const names = Object.keys(sweep.psi_s[0]).filter((k) => !k.endsWith("_sem") && k !== "psi_s" && k !== "runs");
       const wanted = names.includes(ctx.params.metric) ? ctx.params.metric : names[0];

@@ -4,7 +4,7 @@
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { BY, CURSOR, HIGHLIGHT, WHITE } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { plotly, chart } from "../js/plots.js";
 import { control, controls, tryThis, latest, select, num, sceneSelect } from "./common.js";
 
 const TITLES = { s: "somatosensory c_s,T (touch)", v: "visual c_v,T (sight)", a: "auditory c_a,0 (cell assemblies → speech)" };
@@ -16,7 +16,7 @@ export const intro = [
 ];
 
 export async function render(root, ctx, index) {
-  const Plotly = await plotly();
+  await plotly();
   const scene = sceneSelect(ctx, index);
   const mute = select("mute", [["none", "nothing"], ["vision", "vision"], ["proprioception", "proprioception"]], ctx.params.mute || "none");
   const colourBy = select("colour-by", ["action", "colour", "shape"], ctx.params.by || "action");
@@ -61,11 +61,11 @@ export async function render(root, ctx, index) {
         traces.push({ x: [sp.x[data.index], data.point_a[0]], y: [sp.y[data.index], data.point_a[1]], mode: "lines+markers", name: `${data.mute} muted`,
           marker: { size: [0, 15], symbol: "diamond", color: CURSOR }, line: { color: CURSOR, dash: "dot" }, showlegend: true });
       }
-      Plotly.react(plots[k], traces, baseLayout({
+      chart(plots[k], traces, {
         title: { text: `${TITLES[space]}`, font: { size: 13 } },
         xaxis: { title: { text: `PC1 (${(100 * sp.explained[0]).toFixed(1)} %)` }, zeroline: false },
         yaxis: { title: { text: `PC2 (${(100 * (sp.explained[1] ?? 0)).toFixed(1)} %)` }, zeroline: false },
-        legend: { orientation: "h", y: -0.3 }, margin: { l: 55, r: 10, t: 30, b: 50 } }), CONFIG);
+        legend: { orientation: "h", y: -0.3, title: { text: by } }, margin: { l: 55, r: 10, t: 40, b: 50 } });
     });
   }
 

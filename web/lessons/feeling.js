@@ -5,7 +5,7 @@ import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { Cursor } from "../js/cursor.js";
 import { ACTIONS, OBJECT_COLOURS, SHAPE_COLOURS } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
+import { plotly, chart, cursorShape } from "../js/plots.js";
 import { control, controls, tryThis, latest, slider, select, num } from "./common.js";
 
 export const intro = [
@@ -80,13 +80,14 @@ export async function render(root, ctx) {
           name: s.shape, legendgroup: s.shape, showlegend: k === 0, line: { color: SHAPE_COLOURS[s.shape], width: 2 } });
       });
     });
-    const layout = baseLayout({ grid: { rows: 5, columns: 1, shared_xaxes: true, pattern: "independent" },
-      legend: { orientation: "h", y: 1.06 }, margin: { l: 110, r: 10, t: 40, b: 40 } });
+    const layout = { grid: { rows: 5, columns: 1, shared_xaxes: true, pattern: "independent" },
+      title: `joint angles of “${action.value} the ${colour.value} …” on the four shapes (scaled to 0-1 by the joint limits)`,
+      legend: { orientation: "h", y: 1.06, title: { text: "object shape" } }, margin: { l: 110, r: 10, t: 70, b: 45 } };
     data.joint_names.forEach((joint, k) => {
       layout[`yaxis${k ? k + 1 : ""}`] = { title: { text: joint, font: { size: 10 } }, range: [0, 1] };
       layout[`xaxis${k ? k + 1 : ""}`] = { matches: k ? "x" : undefined, showticklabels: k === 4, title: k === 4 ? { text: "time (s)" } : undefined };
     });
-    Plotly.react(plot, traces, layout, CONFIG);
+    chart(plot, traces, layout);
     const longest = Math.max(...data.series.map((s) => (s.proprioception[0].length - 1) / s.fps));
     time.max = longest.toFixed(2);
     drawCursor();

@@ -4,7 +4,7 @@
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { EXACT_SCALE, SPLIT_COLOURS } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { plotly, chart } from "../js/plots.js";
 import { control, controls, tryThis, select, num } from "./common.js";
 
 export const intro = [
@@ -13,7 +13,7 @@ export const intro = [
 ];
 
 export async function render(root, ctx, index) {
-  const Plotly = await plotly();
+  await plotly();
   const models = index.models;
   const byMode = (mode) => models.find((m) => index.modes[m] === mode);
   const defaultA = ctx.params.a && models.includes(ctx.params.a) ? ctx.params.a : byMode("faithful") || index.model;
@@ -26,6 +26,7 @@ export async function render(root, ctx, index) {
     title: h("h2", { id: `title-${k}` }), summary: h("div", { id: `summary-${k}` }),
     grid: h("div", { class: "plot", id: `grid-${k}`, style: "height:330px" }),
     detail: h("div", { class: "small", id: `detail-${k}` }),
+    pick: select(`pick-${k}`, [], ""),
   }));
   const results = [null, null];
 
@@ -34,7 +35,8 @@ export async function render(root, ctx, index) {
       control(ctx, "a", "left model", pickers[0], "A model the app serves (its checkpoint's mode in brackets below).", "split"),
       control(ctx, "b", "right model", pickers[1], "Another model to compare, e.g. end-to-end training against the paper's faithful staged recipe.", "split")),
     error,
-    h("div", { class: "grid2" }, columns.map((c) => h("section", { class: "panel" }, c.title, c.summary, c.grid, c.detail))),
+    h("div", { class: "grid2" }, columns.map((c, k) => h("section", { class: "panel" }, c.title, c.summary, c.grid,
+      controls(control(ctx, `pick${k}`, "read a scene", c.pick, "The same as clicking a cell: what the model said for each recording of the scene.", "split")), c.detail))),
     tryThis(ctx, "On novel scenes, which slot (action, colour or object) fails most often for each model, and does having seen the object in training help?",
       () => {
         if (!results[0]) return [h("p", {}, "Wait for the grids to load.")];
@@ -72,17 +74,22 @@ export async function render(root, ctx, index) {
       const i = r.actions.indexOf(s.action), j = r.objects.indexOf(`${s.colour} ${s.shape}`);
       return { type: "rect", x0: j - 0.5, x1: j + 0.5, y0: i - 0.5, y1: i + 0.5, line: { color: SPLIT_COLOURS.train, width: 2 } };
     });
-    Plotly.react(c.grid, [{ z, x: r.objects, y: r.actions, text, texttemplate: "%{text}", type: "heatmap", zmin: 0, zmax: 1,
-      colorscale: EXACT_SCALE, hovertemplate: "%{y} the %{x}: %{z:.0%} exact<extra></extra>" }],
-    baseLayout({ xaxis: { tickangle: -45, tickfont: { size: 10 } }, yaxis: { autorange: "reversed" }, shapes, margin: { l: 75, r: 10, t: 10, b: 90 } }), CONFIG);
+    chart(c.grid, [{ z, x: r.objects, y: r.actions, text, texttemplate: "%{text}", type: "heatmap", zmin: 0, zmax: 1,
+      colorscale: EXACT_SCALE, colorbar: { title: "exact" }, hovertemplate: "%{y} the %{x}: %{z:.0%} exact<extra></extra>" }],
+    { title: { text: `${r.model}: share of each scene's recordings said exactly (T: training scene)`, font: { size: 13 } },
+      xaxis: { title: "object (colour shape)", tickangle: -45, tickfont: { size: 10 } }, yaxis: { title: "action", autorange: "reversed" },
+      shapes, margin: { l: 75, r: 10, t: 40, b: 110 } });
     c.grid.removeAllListeners?.("plotly_click");
-    c.grid.on("plotly_click", (ev) => {
-      const p = ev.points[0];
-      const s = cells[`${r.actions.indexOf(p.y)},${r.objects.indexOf(p.x)}`];
+    const show = (s) => {
       if (!s) return;
+      c.pick.value = s.scene;
       c.detail.replaceChildren(h("p", {}, h("b", {}, s.expected), ` (${s.split === "train" ? "training" : "novel"} scene; object seen in training: ${s.seen.object ? "yes" : "no"}, action with this colour: ${s.seen.action_with_colour ? "yes" : "no"}, with this shape: ${s.seen.action_with_shape ? "yes" : "no"})`),
         h("ul", {}, s.recordings.map((x) => h("li", {}, `${x.id}: “${x.said || "(silence)"}” `, h("span", { class: x.exact ? "ok" : "bad" }, x.exact ? "✓" : `✗ ${x.wrong.join(", ") || "wording"}`)))));
-    });
+    };
+    c.grid.on("plotly_click", (ev) => show(cells[`${r.actions.indexOf(ev.points[0].y)},${r.objects.indexOf(ev.points[0].x)}`]));
+    c.pick.replaceChildren(h("option", { value: "" }, "pick a scene"),
+      ...r.scenes.map((s) => h("option", { value: s.scene }, `${s.expected} (${s.split})`)));
+    c.pick.onchange = () => show(r.scenes.find((s) => s.scene === c.pick.value));
   }
 
   async function load(k) {

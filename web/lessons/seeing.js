@@ -4,7 +4,7 @@
 import { get, upload } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
 import { ACCENT, COLOUR_COLOURS, NEUTRAL } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { plotly, chart } from "../js/plots.js";
 import { control, controls, tryThis, latest, slider, num, sceneSelect } from "./common.js";
 
 export const intro = [
@@ -13,7 +13,7 @@ export const intro = [
 ];
 
 export async function render(root, ctx, index) {
-  const Plotly = await plotly();
+  await plotly();
   const scene = sceneSelect(ctx, index);
   const frame = slider("frame", 0, 400, 1, Number(ctx.params.frame || 0));
   const frameValue = h("span", { class: "value", id: "frame-value" }, frame.value);
@@ -52,11 +52,12 @@ export async function render(root, ctx, index) {
     stages.replaceChildren(...seen.stages.map((s, k) => h("figure", {},
       h("img", { src: s.image, alt: s.title, dataset: { stage: s.key } }), h("figcaption", {}, `${k + 1}. ${s.title}`))));
     const n = seen.feature_names.length;
-    Plotly.react(bars, [{
-      x: seen.feature_names, y: seen.features, type: "bar",
+    chart(bars, [{
+      x: seen.feature_names, y: seen.features, type: "bar", name: "feature value",
       marker: { color: seen.feature_names.map((name, i) => (i < 16 ? ACCENT : i < 19 ? COLOUR_COLOURS[["red", "green", "blue"][i - 16]] : NEUTRAL)) },
-    }], baseLayout({ title: { text: `the ${seen.paper_features} features MTRNN_v reads (grey: centroid, kept apart)`, font: { size: 13 } },
-      yaxis: { range: [0, 1] }, xaxis: { tickangle: -45, range: [-0.5, n - 0.5] }, margin: { l: 50, r: 10, t: 30, b: 75 } }), CONFIG);
+    }], { title: { text: `the ${seen.paper_features} features MTRNN_v reads (blue: shape, R G B: colour, grey: centroid, kept apart)`, font: { size: 13 } },
+      yaxis: { title: "value (scaled to 0-1)", range: [0, 1] }, xaxis: { title: "feature (d1-d16: contour distances)", tickangle: -45, range: [-0.5, n - 0.5] },
+      margin: { l: 55, r: 10, t: 40, b: 95 } });
   }
 
   const load = latest(async () => {

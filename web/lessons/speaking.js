@@ -3,7 +3,8 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
-import { plotly, CONFIG, baseLayout } from "../js/plots.js";
+import { plotly, chart } from "../js/plots.js";
+import { SEQUENTIAL } from "../js/palette.js";
 import { control, controls, tryThis, latest, slider, num } from "./common.js";
 
 export const intro = [
@@ -14,7 +15,7 @@ export const intro = [
 ];
 
 export async function render(root, ctx) {
-  const Plotly = await plotly();
+  await plotly();
   const text = h("input", { type: "text", id: "utterance", value: ctx.params.text || "slide the red apple." });
   const params = {
     gamma: slider("gamma", 0, 12, 1, ctx.params.gamma ?? 4),
@@ -49,8 +50,9 @@ export async function render(root, ctx) {
       }));
 
   function heat(el, z, title, zmax) {
-    Plotly.react(el, [{ z, y: speech.labels, type: "heatmap", colorscale: "YlGnBu", reversescale: true, zmin: 0, zmax }],
-      baseLayout({ title: { text: title, font: { size: 13 } }, xaxis: { title: { text: "time step" } }, yaxis: { tickfont: { size: 10 }, autorange: "reversed" }, margin: { l: 50, r: 10, t: 30, b: 40 } }), CONFIG);
+    chart(el, [{ z, y: speech.labels, type: "heatmap", colorscale: SEQUENTIAL, zmin: 0, zmax, colorbar: { title: "activity" } }],
+      { title: { text: title, font: { size: 13 } }, xaxis: { title: "time step of MTRNN_a" },
+        yaxis: { title: "phoneme neuron", tickfont: { size: 10 }, autorange: "reversed" }, margin: { l: 60, r: 10, t: 40, b: 45 } });
   }
 
   const load = latest(async () => {

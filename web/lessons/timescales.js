@@ -3,8 +3,8 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
-import { NEUTRAL, OKABE_ITO } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
+import { NEUTRAL, OKABE_ITO, SEQUENTIAL } from "../js/palette.js";
+import { plotly, chart, cursorShape } from "../js/plots.js";
 import { control, controls, prose, tryThis, latest, slider, num, sceneSelect } from "./common.js";
 
 export const intro = [
@@ -54,11 +54,12 @@ export async function render(root, ctx, index) {
     const x = pulse.z.map((_, i) => i);
     const refs = Object.entries(pulse.references).map(([name, z]) => ({
       x, y: z, name: `${name} τ=${{ IO: 2, Cf: 5, Cs: 70 }[name]}`, mode: "lines", line: { width: 1, dash: "dot" }, opacity: 0.6 }));
-    Plotly.react(pulsePlot, [
+    chart(pulsePlot, [
       { x, y: pulse.input, name: "input x", mode: "lines", line: { color: NEUTRAL, shape: "hv" } },
       ...refs,
       { x, y: pulse.z, name: `z (τ = ${pulse.tau})`, mode: "lines", line: { color: OKABE_ITO.vermillion, width: 3 } },
-    ], baseLayout({ xaxis: { title: { text: "time step" } }, yaxis: { title: { text: "state" }, range: [0, 1.05] }, legend: { orientation: "h", y: 1.15 } }), CONFIG);
+    ], { title: `a leaky unit with τ = ${pulse.tau} answering a 10-step pulse (eq. 3)`, xaxis: { title: "time step" },
+      yaxis: { title: "internal state z", range: [0, 1.05] }, legend: { orientation: "h", y: -0.25 }, margin: { l: 60, r: 10, t: 40, b: 80 } });
     pulseReadout.replaceChildren(
       h("span", {}, "half-life: ", h("b", { id: "half-life" }, pulse.half_life_steps === null ? "none (τ = 1 forgets at once)" : `${num(pulse.half_life_steps, 1)} steps`)),
       h("span", {}, "peak: ", h("b", {}, num(pulse.peak))),
@@ -69,12 +70,13 @@ export async function render(root, ctx, index) {
     const t = Number(time.value);
     ["IO", "Cf", "Cs"].forEach((name, k) => {
       const layer = activity.layers[name];
-      const trace = { z: layer.y, type: "heatmap", colorscale: "Viridis", zmin: name === "IO" ? 0 : -0.36, zmax: name === "IO" ? 1 : 1.36, showscale: k === 2 };
+      const trace = { z: layer.y, type: "heatmap", colorscale: SEQUENTIAL, zmin: name === "IO" ? 0 : -0.36, zmax: name === "IO" ? 1 : 1.36, showscale: k === 2,
+        colorbar: { title: "activity y" } };
       if (name === "IO") trace.y = activity.phoneme_labels;
-      Plotly.react(layerPlots[k], [trace], baseLayout({
+      chart(layerPlots[k], [trace], {
         title: { text: `${name} (τ = ${layer.tau}), change/step ${num(layer.speed, 4)}`, font: { size: 13 } },
-        xaxis: { title: { text: "time step" } }, yaxis: { title: { text: name === "IO" ? "phoneme neuron" : "unit" }, tickfont: { size: 8 } },
-        shapes: [cursorShape(t)], margin: { l: 45, r: 10, t: 30, b: 40 } }), CONFIG);
+        xaxis: { title: "time step" }, yaxis: { title: name === "IO" ? "phoneme neuron" : `${name} unit`, tickfont: { size: 8 } },
+        shapes: [cursorShape(t)], margin: { l: 50, r: 10, t: 40, b: 45 } });
     });
   }
 

@@ -3,8 +3,9 @@
 import { get, post, withQuery } from "../js/api.js";
 import { h, field, help, badge, errorBox, fmt } from "../js/dom.js";
 import { Cursor } from "../js/cursor.js";
+import { mountTimeline } from "../js/timeline.js";
 import { CATEGORICAL } from "../js/palette.js";
-import { plotly, CONFIG, baseLayout, cursorShape } from "../js/plots.js";
+import { plotly, chart, cursorShape } from "../js/plots.js";
 
 export const meta = { route: "scene", title: "Scene", nav: false };
 
@@ -74,10 +75,13 @@ export async function render(root, ctx) {
     strip.append(h("img", { src: frameUrl(i, false, 96), alt: `frame ${i}`, title: `t = ${(i / detail.fps).toFixed(2)} s`,
       onclick: () => cursor.seek(i / detail.fps) }));
   }
-  root.append(controls,
+  const timelineBox = h("section", { class: "panel", id: "timeline" });
+  root.append(controls, timelineBox,
     h("div", { class: "grid2" },
       h("section", { class: "panel" }, h("h2", {}, "3D ", help("The NAO's right arm replaying the recorded joint angles over the table, with the object in its colour and shape. Drag to orbit, scroll to zoom.", "proprioception")), iframe),
       h("section", { class: "panel" }, h("h2", {}, "Camera ", help("What the robot's camera saw at the cursor; the strip below shows the whole recording (click a thumbnail to jump there).", "vision features")), frameImg, strip)));
+
+  const timelineReady = mountTimeline(timelineBox, id, (t) => cursor.seek(t), t0);
 
   // plots
   const propPlot = h("div", { class: "plot", id: "prop-plot" });
@@ -94,22 +98,26 @@ export async function render(root, ctx) {
 
   const Plotly = await plotly();
   const times = detail.joints.map((_, i) => i / detail.fps);
-  await Plotly.newPlot(propPlot, detail.joint_names.map((name, j) => ({
+  await chart(propPlot, detail.joint_names.map((name, j) => ({
     x: times, y: detail.proprioception.map((r) => r[j]), name, mode: "lines", line: { color: CATEGORICAL[j] },
-  })), baseLayout({ height: 260, xaxis: { title: "time (s)" }, yaxis: { range: [0, 1] }, shapes: [cursorShape(t0)],
-    legend: { orientation: "h", y: -0.3 } }), CONFIG);
-  await Plotly.newPlot(visPlot, [{ type: "heatmap", x: times, y: detail.vision_feature_names,
+  })), { height: 280, title: "Proprioception: joint angles scaled by the joint limits",
+    xaxis: { title: "time (s)" }, yaxis: { title: "scaled angle (0-1)", range: [0, 1] }, shapes: [cursorShape(t0)],
+    legend: { orientation: "h", y: -0.35, title: "joint" } });
+  await chart(visPlot, [{ type: "heatmap", x: times, y: detail.vision_feature_names,
     z: detail.vision_feature_names.map((_, f) => detail.vision.map((r) => r[f])), colorscale: "Viridis", showscale: false }],
-  baseLayout({ height: 260, shapes: [cursorShape(t0)], yaxis: { autorange: "reversed" } }), CONFIG);
+  { height: 280, title: "Vision features per frame (16 distances, mean RGB, centroid)", shapes: [cursorShape(t0)],
+    xaxis: { title: "time (s)" }, yaxis: { title: "feature", autorange: "reversed" } });
   const labels = description.phoneme_labels;
   const steps = description.activity.length;
   const heat = (act) => [{ type: "heatmap", y: labels, z: labels.map((_, k) => act.map((r) => r[k])),
     colorscale: "Greys", reversescale: true, zmin: 0, zmax: 1, showscale: false }];
-  const heatLayout = () => baseLayout({ height: 520, xaxis: { title: "time step" }, yaxis: { autorange: "reversed", dtick: 1, tickfont: { size: 9 } },
+  const heatLayout = (title) => ({ height: 520, title, xaxis: { title: "time step of MTRNN_a" },
+    yaxis: { title: "output neuron (phoneme)", autorange: "reversed", dtick: 1, tickfont: { size: 9 } },
     shapes: [cursorShape(0)] });
-  await Plotly.newPlot(outPlot, heat(description.activity), heatLayout(), CONFIG);
-  if (description.target_activity) await Plotly.newPlot(targetPlot, heat(description.target_activity), heatLayout(), CONFIG);
-  else targetPlot.append(h("p", { class: "muted" }, "No utterance in this recording, so no target."));
+  await chart(outPlot, heat(description.activity), heatLayout("What the model says: MTRNN_a's softmax output"));
+  if (description.target_activity) {
+    await chart(targetPlot, heat(description.target_activity), heatLayout("What the teacher said: the target activity"));
+  } else targetPlot.append(h("p", { class: "muted" }, "No utterance in this recording, so no target."));
 
   // following the cursor
   let shownFrame = -1, loading = false, lastPlot = 0, pendingFrame = null;
@@ -135,6 +143,7 @@ export async function render(root, ctx) {
     let best = 0;
     row.forEach((v, k) => { if (v > row[best]) best = k; });
     phonemeNow.textContent = row[best] >= 0.3 ? labels[best] : "·";
+    timeline.follow(t, state.playing);
     const now = performance.now();
     if (!state.playing || now - lastPlot > 150) {
       lastPlot = now;
@@ -146,6 +155,7 @@ export async function render(root, ctx) {
     if (!state.playing) ctx.setParams({ t: t > 0 ? t.toFixed(2) : "" });
   }
 
+  const timeline = await timelineReady;
   const cursor = new Cursor(id, detail.duration_s, detail.fps, onChange);
   playBtn.addEventListener("click", () => (cursor.state.playing ? cursor.pause() : cursor.play()));
   slider.addEventListener("input", () => cursor.seek(Number(slider.value)));

@@ -9,7 +9,8 @@ import numpy as np
 
 from model.experiments.report.tables import MODES, PAPER, SPLITS
 
-MODE_COLOURS = {"faithful": "#1f77b4", "end_to_end": "#2ca02c", "peer": "#ff7f0e"}
+# The app's palette (web/js/palette.js, Okabe-Ito): the modes in the same colours on the page and here.
+MODE_COLOURS = {"faithful": "#0072B2", "end_to_end": "#E69F00", "peer": "#009E73"}
 
 
 def _pyplot():
@@ -46,6 +47,8 @@ def figure_modes(summaries: dict[str, dict], path: Path) -> None:
                 label="paper (mean)",
             )
         ax.set_xticks(np.arange(3), SPLITS)
+        ax.set_xlabel("split")
+        ax.set_ylabel(f"{label} (mean +- s.e.)")
         ax.set_title(label)
         ax.grid(axis="y", alpha=0.3)
     axes[0].legend(fontsize=8)
@@ -72,6 +75,7 @@ def figure_psi_s(table: list[dict], path: Path) -> None:
             ax.errorbar(x, y, yerr=e, marker="o", capsize=3, label=label)
         ax.set_xscale("log")
         ax.set_xlabel("psi_s")
+        ax.set_ylabel(", ".join(label for _, label in series))
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3)
         if len(series) > 1:
@@ -96,6 +100,7 @@ def figure_cosine(table: list[dict], examples: dict[float, list[list[float]]], p
         capsize=3,
     )
     axes[0].set_title("(a) training epochs")
+    axes[0].set_ylabel("epochs to converge")
     for key in ("d_avg", "d_rel"):
         axes[1].errorbar(
             xs,
@@ -106,6 +111,7 @@ def figure_cosine(table: list[dict], examples: dict[float, list[list[float]]], p
             label=key,
         )
     axes[1].set_title("(b) d_avg and d_rel")
+    axes[1].set_ylabel("distance (eqs. 13-15)")
     axes[1].legend(fontsize=8)
     for ax in axes[:2]:
         ax.set_xticks(xs, labels)

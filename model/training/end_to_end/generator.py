@@ -100,7 +100,9 @@ def train_generator(
     attempts: list[float] = []
     epochs: list[int] = []
     best: tuple[MTRNN, Tensor, Tensor] | None = None
-    for attempt in range(max(1, options.auditory_attempts)):
+    tries = max(1, options.auditory_attempts)
+    for attempt in range(tries):
+        report.attempt = (attempt + 1, tries)
         if attempt > 0:
             g = torch.Generator().manual_seed(seed * 7919 + attempt)
             model.auditory = MTRNN(model.config.auditory, g)
@@ -129,6 +131,7 @@ def train_generator(
         if said == 1.0:
             break
     assert best is not None
+    report.attempt = None
     model.auditory = best[0]
     with torch.no_grad():
         assemblies.projection.copy_(best[1])

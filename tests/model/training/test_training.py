@@ -147,12 +147,6 @@ def test_modes_are_a_registry(monkeypatch: pytest.MonkeyPatch):
     assert calls and calls[0][0] == 12 and calls[0][2] == 3 and calls[0][1] > 0
 
 
-def test_epochs_scale_multiplies_every_stage():
-    scaled = TrainingConfig().scaled(0.1)
-    assert (scaled.epochs_auditory, scaled.epochs_somatosensory, scaled.epochs_assemblies) == (150, 40, 200)
-    assert TrainingConfig().scaled(1e-9).epochs_visual == 1
-
-
 def test_recordings_of_one_sentence_share_one_auditory_context():
     """3.3: c_a,0 is trained per sentence, so a scene's recordings get the same c_a,0 (and the
     progress reports still show one row per recording)."""
