@@ -62,9 +62,9 @@ def _include_routers(app: FastAPI, names: Sequence[str] | None) -> None:
 def _start(settings: Settings, load_corpus: CorpusLoader) -> Services:
     services = build_services(settings, load_corpus(settings))
     if settings.viser:
-        from server.viewer import SceneViewer
+        from server.viewer import ViewerPool
 
-        services.viewer = SceneViewer(forward_kinematics)
+        services.viewer = ViewerPool(forward_kinematics)
     logger.info("corpus: %d recordings; model %r", len(services.corpus.entries), services.models.served.name)
     return services
 

@@ -1,7 +1,7 @@
 """The app's services, created once in the lifespan and handed to the routes as typed dependencies.
 
 `Services` holds the corpus, the one model registry, the one Csc survey, the describe service, the
-timelines (the live description), the one job manager and (when running) the 3D viewer. A route
+timelines (the live description), the one job manager and (when running) the 3D views. A route
 asks for what it uses: ``def route(models: ModelsDep, survey: SurveyDep) -> ...``.
 """
 
@@ -23,7 +23,7 @@ from server.services.timeline import TimelineService
 from server.settings import Settings
 
 if TYPE_CHECKING:
-    from server.viewer import SceneViewer
+    from server.viewer import ViewerPool
 
 
 @dataclass
@@ -36,7 +36,7 @@ class Services:
     timeline: TimelineService
     jobs: JobManager
     examples: ExampleService
-    viewer: SceneViewer | None = None
+    viewer: ViewerPool | None = None  # the 3D views, one per page load
 
 
 def build_services(settings: Settings, corpus: Corpus) -> Services:

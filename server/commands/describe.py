@@ -48,7 +48,7 @@ def describer(settings: Settings) -> DescribeService:
 
 def run(args: argparse.Namespace) -> int:
     from data.recording import MAX_UPLOAD_BYTES, RecordingError
-    from server.routes.describe import description_of
+    from server.services.answers import description_of
     from server.settings import Settings
 
     settings = Settings.from_env(model=args.model, viser=False)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, File, HTTPException, Query, UploadFile
+from fastapi import APIRouter, HTTPException, Query, Request
 
 from server.deps import CorpusDep, JobsDep, ModelsDep, SettingsDep, SurveyDep
 from server.lessons import LESSONS
@@ -20,6 +20,7 @@ from server.lessons.seeing import decode_image
 from server.lessons.seeing import seeing as see
 from server.lessons.speaking import speak
 from server.lessons.timescales import leaky_pulse, timescale_activity
+from server.routes.forms import read_upload
 from server.schemas.common import Problem
 from server.schemas.lessons import (
     Activity,
@@ -114,17 +115,37 @@ def seeing(
     return Seen(**out, source=f"{scene}, frame {frame}", frames=len(frames))
 
 
-@router.post("/seeing", response_model=Seen, responses=ERRORS)
+IMAGE_FORM = {
+    "requestBody": {
+        "content": {
+            "multipart/form-data": {
+                "schema": {
+                    "type": "object",
+                    "required": ["image"],
+                    "properties": {
+                        "image": {
+                            "type": "string",
+                            "format": "binary",
+                            "description": "a PNG or JPEG picture",
+                        }
+                    },
+                }
+            }
+        }
+    }
+}
+
+
+@router.post("/seeing", response_model=Seen, responses=ERRORS, openapi_extra=IMAGE_FORM)
 async def seeing_upload(
-    image: Annotated[UploadFile, File(description="a PNG or JPEG picture")],
+    request: Request,
     colour_radius: Annotated[int, Query(description="mean-shift colour window (4..64)")] = 24,
 ) -> Seen:
-    """Lesson 3: the vision pipeline on an uploaded picture."""
-    data = await image.read(MAX_IMAGE_BYTES + 1)
-    if len(data) > MAX_IMAGE_BYTES:
-        raise HTTPException(413, f"the picture is larger than {MAX_IMAGE_BYTES // (1024 * 1024)} MB")
+    """Lesson 3: the vision pipeline on an uploaded picture (multipart field ``image``)."""
+    too_large = HTTPException(413, f"the picture is larger than {MAX_IMAGE_BYTES // (1024 * 1024)} MB")
+    data, filename = await read_upload(request, "image", "picture", MAX_IMAGE_BYTES, too_large)
     out = see(decode_image(data), colour_radius)
-    return Seen(**out, source=image.filename or "upload")
+    return Seen(**out, source=filename or "upload")
 
 
 @router.get("/feeling", response_model=Feeling, responses=ERRORS)

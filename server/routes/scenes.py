@@ -12,6 +12,7 @@ from data.world import FPS
 from model.metrics import sentence_exact
 from server.deps import CorpusDep, DescribeDep, ModelsDep, SurveyDep
 from server.schemas.scenes import RecordingDetail, SceneList, SceneSummary
+from server.services.answers import rows
 from server.services.corpus import frame_jpeg
 from server.services.models import LoadedModel
 from server.services.survey import Survey
@@ -19,11 +20,6 @@ from server.services.survey import Survey
 router = APIRouter(prefix="/api/scenes", tags=["scenes"])
 
 VISION_FEATURE_NAMES = [f"d{k + 1}" for k in range(16)] + ["R", "G", "B", "centroid x", "centroid y"]
-
-
-def rows(array: Any, digits: int = 5) -> list[list[float]]:
-    """A 2-D array as rows of rounded floats."""
-    return [[round(float(v), digits) for v in row] for row in array]
 
 
 def summary_of(served: LoadedModel, entry: Any, survey: Survey | None) -> SceneSummary:

@@ -1,8 +1,10 @@
-"""The 3D viewer's shared time cursor and the commands that move it."""
+"""The time cursor of a 3D view and the commands that move it; a view is named by its id (`VIEW_ID`)."""
 
 from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
+
+VIEW_ID = r"^[A-Za-z0-9_-]{1,32}$"  # made by the page (web/js/cursor.js), random unless shared on purpose
 
 
 class ViewerState(BaseModel):

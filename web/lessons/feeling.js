@@ -3,13 +3,13 @@
 
 import { get } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
-import { Cursor } from "../js/cursor.js";
+import { Cursor, viserSrc } from "../js/cursor.js";
 import { ACTIONS, OBJECT_COLOURS, SHAPE_COLOURS } from "../js/palette.js";
 import { plotly, chart, cursorShape } from "../js/plots.js";
 import { control, controls, tryThis, latest, slider, select, num } from "./common.js";
 
 export const intro = [
-  "Proprioception is the body's sense of itself: here the five joint angles of the NAO's right arm, 20 times a second, scaled to [0, 1] by the joint limits. It is what MTRNN_s reads. Pick an action and a colour: the plot overlays the same action on the four shapes. The 3D arm replays one of them; the red line is one time cursor shared with it.",
+  "Proprioception is the body's sense of itself: here the five joint angles of the NAO's right arm, 20 times a second, scaled to [0, 1] by the joint limits. It is what MTRNN_s reads. Pick an action and a colour: the plot overlays the same action on the four shapes. The 3D arm replays one of them; the red line is one time cursor shared with it, and this page's controls are the only ones that move it.",
   "All the objects have about the same mass and friction (paper 4.1), so the arm moves much the same whatever it is moving. The table below measures it: how different the joint trajectories are, and how far apart the model's abstracted contexts c_s,T (touch) and c_v,T (vision) land.",
 ];
 
@@ -25,7 +25,7 @@ export async function render(root, ctx) {
   const table = h("div", { id: "touch-table" });
   const viewer = await get("/api/viewer").catch(() => ({ available: false }));
   const iframe = viewer.available
-    ? h("iframe", { src: "/viser/", class: "viser", title: "3D view of the NAO arm (viser)", id: "viser-frame" })
+    ? h("iframe", { src: viserSrc(), class: "viser", title: "3D view of the NAO arm (viser)", id: "viser-frame" })
     : h("p", { class: "muted" }, "The 3D viewer is not running in this server (started with MTRNN_VISER=0).");
   const viewerNote = h("p", { class: "muted small", id: "viewer-note" });
   let data = null;
@@ -67,7 +67,7 @@ export async function render(root, ctx) {
     const t0 = Math.min(Number(time.value), duration);
     cursor.connect(t0).then((live) => {
       if (live) cursor.seek(t0); // keep the page's cursor when the 3D view switches recordings
-      viewerNote.textContent = live ? `replaying ${series.id}; the panel's own play controls move the cursor too` : "the 3D viewer is not running in this server (MTRNN_VISER=0): the cursor is local";
+      viewerNote.textContent = live ? `replaying ${series.id}; the time control above moves the arm (the 3D panel has no controls of its own)` : cursor.reason ? `${cursor.reason}: the cursor is local` : "the 3D viewer is not running in this server (MTRNN_VISER=0): the cursor is local";
     });
   }
 

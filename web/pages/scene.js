@@ -2,7 +2,7 @@
 
 import { get, post, withQuery } from "../js/api.js";
 import { h, field, help, badge, errorBox, fmt } from "../js/dom.js";
-import { Cursor } from "../js/cursor.js";
+import { Cursor, viserSrc } from "../js/cursor.js";
 import { mountTimeline } from "../js/timeline.js";
 import { CATEGORICAL } from "../js/palette.js";
 import { plotly, chart, cursorShape } from "../js/plots.js";
@@ -50,7 +50,7 @@ export async function render(root, ctx) {
         `model ${description.model} · ${fmt(description.timings.total_ms, 1)} ms (model ${fmt(description.timings.model_ms, 1)} ms)`,
         " · ", h("a", { href: withQuery("#/csc", { space: "a", highlight: id }) }, "see it in the Csc spaces"))));
 
-  // controls of the shared cursor
+  // controls of the page's cursor
   const t0 = Math.min(Number(ctx.params.t || 0), detail.duration_s);
   const playBtn = h("button", { type: "button", id: "play" }, "▶ play");
   const slider = h("input", { type: "range", id: "time", min: 0, max: detail.duration_s, step: 1 / detail.fps, value: t0 });
@@ -59,7 +59,7 @@ export async function render(root, ctx) {
   const overlay = h("input", { type: "checkbox", id: "overlay", checked: ctx.params.overlay === "1" });
   const phonemeNow = h("span", { class: "phoneme-now", id: "phoneme-now" }, "–");
   const controls = h("div", { class: "controls" },
-    h("span", { class: "field" }, playBtn, help("Play or pause the recording. The 3D arm, the camera frame, the plots and the phoneme follow one shared time cursor (the 3D panel's own controls move it too).", null)),
+    h("span", { class: "field" }, playBtn, help("Play or pause the recording. The 3D arm, the camera frame, the plots and the phoneme follow one time cursor, this page's own: these controls are the only ones that move it (add view=<id> to the page's address to share one 3D view between tabs).", null)),
     field("time", slider, "Scrub through the recording (seconds at 20 frames per second).", null),
     timeLabel,
     field("speed", speed, "Replay speed.", null),
@@ -67,7 +67,7 @@ export async function render(root, ctx) {
     h("span", { class: "field" }, "producing ", phonemeNow, help("The phoneme MTRNN_a produces at the cursor. The utterance is generated after perception; here its time is stretched over the recording's so both can be scanned together.", "phoneme")));
 
   // 3D view and camera
-  const iframe = h("iframe", { src: "/viser/", class: "viser", title: "3D view of the NAO arm (viser)", id: "viser-frame" });
+  const iframe = h("iframe", { src: viserSrc(), class: "viser", title: "3D view of the NAO arm (viser)", id: "viser-frame" });
   const frameImg = h("img", { class: "camera", id: "camera-frame", alt: "camera frame", src: frameUrl(0, overlay.checked) });
   const strip = h("div", { class: "strip", id: "frame-strip" });
   for (let k = 0; k < STRIP; k++) {
@@ -161,7 +161,7 @@ export async function render(root, ctx) {
   slider.addEventListener("input", () => cursor.seek(Number(slider.value)));
   speed.addEventListener("change", () => cursor.speed(Number(speed.value)));
   const viewer = await cursor.connect(t0);
-  if (!viewer) iframe.replaceWith(h("p", { class: "muted" }, "The 3D viewer is not running in this server."));
+  if (!viewer) iframe.replaceWith(h("p", { class: "muted" }, cursor.reason || "The 3D viewer is not running in this server."));
   onChange({ ...cursor.state, t: t0 });
   return () => cursor.close();
 }

