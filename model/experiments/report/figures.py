@@ -51,7 +51,7 @@ def figure_modes(summaries: dict[str, dict], path: Path) -> None:
         ax.set_ylabel(f"{label} (mean +- s.e.)")
         ax.set_title(label)
         ax.grid(axis="y", alpha=0.3)
-    axes[0].legend(fontsize=8)
+    axes[1].legend(fontsize=8, loc="lower right")  # the panel with every mode and the paper's marks
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
