@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import viser
 
-from data.world import FPS, TABLE_Z, colour_rgb
+from data.world import FPS, OBJECT_SIZE, TABLE_Z, colour_rgb
 from server.services.errors import Unavailable
 
 logger = logging.getLogger(__name__)
@@ -133,7 +133,8 @@ class SceneViewer:
     def _build_gui(self) -> None:
         self.gui_title = self.server.gui.add_markdown("**No recording loaded.**")
 
-    def _place_object(self, colour: str | None, shape: str | None, xy: np.ndarray, table_z: float) -> None:
+    def _place_object(self, colour: str | None, shape: str | None, xy: np.ndarray) -> None:
+        """The object on the table at `xy`, in the scenario's size (data.world.OBJECT_SIZE) and colour."""
         for handle in self.objects.values():
             handle.remove()
         self.objects = {}
@@ -142,36 +143,35 @@ class SceneViewer:
         rgb = colour_rgb(colour) if colour else (150, 150, 150)
         scene = self.server.scene
         x, y = float(xy[0]), float(xy[1])
+        half_x, half_y, height = OBJECT_SIZE[shape]
         if shape == "apple":
             self.objects["body"] = scene.add_icosphere(
                 "/object/body",
-                radius=0.03,
+                radius=half_x,
                 color=rgb,
-                scale=(1.0, 1.0, 0.9),
-                position=(x, y, table_z + 0.027),
+                scale=(1.0, 1.0, height / (2 * half_x)),
+                position=(x, y, TABLE_Z + height / 2),
             )
             self.objects["stem"] = scene.add_box(
                 "/object/stem",
                 color=(90, 60, 30),
                 dimensions=(0.005, 0.005, 0.02),
-                position=(x, y, table_z + 0.06),
+                position=(x, y, TABLE_Z + height + 0.008),
             )
-        elif shape == "banana":
-            ts = np.linspace(-1.0, 1.0, 7)
-            for k, s in enumerate(ts):
+        elif shape == "banana":  # lies across the table: long along y, bent towards +x
+            for k, s in enumerate(np.linspace(-1.0, 1.0, 7)):
                 self.objects[f"seg{k}"] = scene.add_icosphere(
                     f"/object/seg{k}",
-                    radius=0.017 * (1.0 - 0.35 * s * s),
+                    radius=half_x * (1.0 - 0.35 * s * s),
                     color=rgb,
-                    position=(x + 0.025 * (1 - s * s), y + 0.06 * s, table_z + 0.015),
+                    position=(x + half_x * (1 - s * s), y + (half_y - half_x) * s, TABLE_Z + height / 2),
                 )
-        elif shape == "dice":
+        else:  # dice and phone: boxes
             self.objects["body"] = scene.add_box(
-                "/object/body", color=rgb, dimensions=(0.045, 0.045, 0.045), position=(x, y, table_z + 0.0225)
-            )
-        else:  # phone
-            self.objects["body"] = scene.add_box(
-                "/object/body", color=rgb, dimensions=(0.075, 0.04, 0.012), position=(x, y, table_z + 0.006)
+                "/object/body",
+                color=rgb,
+                dimensions=(2 * half_x, 2 * half_y, height),
+                position=(x, y, TABLE_Z + height / 2),
             )
 
     # recording and cursor
@@ -183,7 +183,6 @@ class SceneViewer:
         keypoints = np.stack([np.stack([self._fk(q)[k] for k in KEYPOINTS]) for q in joints])
         hand = keypoints[:, 3]
         lowest = int(np.argmin(hand[:, 2]))
-        table_z = TABLE_Z  # the scenario's table top (data.world), where the objects stand
         with self._lock, self.server.atomic():
             self._keypoints = keypoints
             for link, a, b in zip(self.links, keypoints[0, :-1], keypoints[0, 1:], strict=True):
@@ -192,15 +191,15 @@ class SceneViewer:
             self.cursor = Cursor(
                 source=source, t=0.0, duration_s=(len(joints) - 1) / fps, speed=self.cursor.speed
             )
-            self.table.position = (float(hand[:, 0].mean()), float(hand[:, 1].mean()), table_z - 0.01)
+            self.table.position = (float(hand[:, 0].mean()), float(hand[:, 1].mean()), TABLE_Z - 0.01)
             self.table.dimensions = (
                 float(np.ptp(hand[:, 0])) + 0.25,
                 float(np.ptp(hand[:, 1])) + 0.3,
                 0.02,
             )
             object_xy = hand[lowest, :2] + np.array([0.04, 0.0])
-            self._place_object(colour, shape, object_xy, table_z)
-            self._frame(np.vstack([keypoints.reshape(-1, 3), [[*object_xy, table_z]], self._table_corners()]))
+            self._place_object(colour, shape, object_xy)
+            self._frame(np.vstack([keypoints.reshape(-1, 3), [[*object_xy, TABLE_Z]], self._table_corners()]))
             label = source if shape is None else f"{source} ({colour} {shape})"
             self.gui_title.content = f"**{label}**"
             self._apply()
