@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import os
 import threading
 import time
 from collections import OrderedDict
@@ -30,6 +29,7 @@ from model.multimtrnn import Description
 from server.services.corpus import Corpus
 from server.services.errors import NotFound, Unavailable
 from server.services.models import ModelRegistry
+from server.settings import Settings
 
 UPLOAD_CACHE_BYTES = 512 * 1024**2  # frames and encodings of the kept uploads
 SLOT_WAIT_S = 20.0  # an upload waits this long for a decode slot (a few uploads ahead), then gets Busy
@@ -84,8 +84,8 @@ class DescribeService:
         self,
         corpus: Corpus,
         models: ModelRegistry,
-        upload_cache: int = 16,
-        decode_slots: int = os.cpu_count() or 1,
+        upload_cache: int = Settings.upload_cache,
+        decode_slots: int = Settings.decode_slots,
         cache_bytes: int = UPLOAD_CACHE_BYTES,
     ) -> None:
         self.corpus, self.models, self._cache_size, self._cache_bytes = (
