@@ -142,12 +142,12 @@ def bench_nets(epochs: int, seed: int = 0) -> dict:
 
 def bench_training(modes: list[str], corpus_path: str | None = None, fold: int = 0, seed: int = 0) -> dict:
     from data.corpus import load_corpus
-    from model.experiments.evaluation import fold_split
+    from model.experiments.splits import scene_split
     from model.training import train
 
     corpus = load_corpus(corpus_path)
     data = corpus.training_data()
-    train_idx, _ = fold_split(data.ids, fold)
+    train_idx, _ = scene_split(data.ids, fold)
     out = {}
     for mode in modes:
         start = time.perf_counter()

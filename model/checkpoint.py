@@ -1,9 +1,10 @@
 """Checkpoints of every training mode: `model.safetensors` (weights) + `meta.json` (mode, config,
 assemblies, seed, split, metrics, lexicon, T_a) + optional `training_csc.safetensors` (the learned
-c_0 / c_T tables, for the Csc explorer). Loading never unpickles and rebuilds the model its
-meta["mode"] names: the peer baseline (`model.training.peer`) or, for every other mode, a
-MultiMTRNN. Writing is atomic: everything goes into a temporary sibling directory that then
-replaces `directory` in one rename.
+c_0 / c_T tables, for the Csc explorer) + optional `familiarity.safetensors` (the training set's
+`model.familiarity.Familiarity`; `load_familiarity`, None for checkpoints written before it).
+Loading never unpickles and rebuilds the model its meta["mode"] names: the peer baseline
+(`model.training.peer`) or, for every other mode, a MultiMTRNN. Writing is atomic: everything goes
+into a temporary sibling directory that then replaces `directory` in one rename.
 """
 
 from __future__ import annotations
@@ -16,10 +17,13 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from safetensors.numpy import load_file as load_arrays
+from safetensors.numpy import save_file as save_arrays
 from safetensors.torch import load_file, save_file
 
 from model.assemblies import ASSEMBLIES
 from model.config import MultiMTRNNConfig
+from model.familiarity import Familiarity
 from model.multimtrnn import MultiMTRNN
 from model.training.common import Describer
 from model.training.peer import LEGACY, PeerConfig, PeerModel
@@ -27,6 +31,7 @@ from model.training.peer import LEGACY, PeerConfig, PeerModel
 WEIGHTS = "model.safetensors"
 META = "meta.json"
 TRAINING_CSC = "training_csc.safetensors"
+FAMILIARITY = "familiarity.safetensors"
 FORMAT_VERSION = 1
 
 
@@ -59,6 +64,7 @@ def save(
     directory: str | Path,
     meta: dict | None = None,
     training_csc: dict[str, np.ndarray] | None = None,
+    familiarity: Familiarity | None = None,
 ) -> Path:
     """Write a checkpoint into `directory` (replaced atomically if it exists)."""
     directory = Path(directory)
@@ -74,6 +80,8 @@ def save(
                 {k: torch.as_tensor(np.ascontiguousarray(v)) for k, v in training_csc.items()},
                 str(tmp / TRAINING_CSC),
             )
+        if familiarity is not None:
+            save_arrays(familiarity.arrays(), str(tmp / FAMILIARITY))
         (tmp / META).write_text(json.dumps(full_meta, indent=2, sort_keys=True))
         if directory.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{directory.name}.old.", dir=directory.parent))
@@ -126,3 +134,9 @@ def load_training_csc(directory: str | Path) -> dict[str, np.ndarray]:
     if not path.exists():
         return {}
     return {k: v.numpy() for k, v in load_file(str(path)).items()}
+
+
+def load_familiarity(directory: str | Path) -> Familiarity | None:
+    """The training set's familiarity saved with the model, None if the checkpoint has none."""
+    path = Path(directory) / FAMILIARITY
+    return Familiarity.from_arrays(load_arrays(str(path))) if path.exists() else None

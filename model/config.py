@@ -62,12 +62,22 @@ def visual_config(io: int = 19) -> MTRNNConfig:
     return MTRNNConfig(io=io, cf=40, cs=23, tau_io=2, tau_cf=5, tau_cs=16)
 
 
+# The learning rules (`model.training.common.make_optimiser`): the paper's adaptive rates times
+# gradients (eqs. 7-10), sign-based RPROP, Adam.
+LEARNING_RULES = ("paper", "rprop", "adam")
+# eq. (10)'s open constant: zeta_i = ZETA_GAIN * mean eta_ij, calibrated on Fig. 3 alone
+# (docs/experiments/faithful.md, `mtrnn cosine`).
+ZETA_GAIN = 1.0
+
+
 @dataclass
 class TrainingConfig:
-    """How the nets learn: the paper's RPROP variant (3.1.4) or Adam, full-batch BPTT."""
+    """How the nets learn: full-batch BPTT with one of `LEARNING_RULES`."""
 
-    optimiser: Literal["rprop", "adam"] = "rprop"
-    lr: float = 0.05  # eta^0, beta^0, zeta^0: initial RPROP rates
+    # None: the mode's own rule (faithful and the cosine experiment: "paper"; end_to_end: "rprop").
+    optimiser: Literal["paper", "rprop", "adam"] | None = None
+    zeta_gain: float = ZETA_GAIN  # eq. (10): zeta = zeta_gain * the mean rate of a Csc unit's weights
+    lr: float = 0.05  # eta^0, beta^0, zeta^0: initial rates
     xi_increase: float = 1.01  # xi+
     xi_decrease: float = 0.96  # xi-
     lr_min: float = 1e-6  # eta_min

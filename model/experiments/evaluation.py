@@ -1,9 +1,10 @@
-"""One evaluation run of the paper's protocol (4.2): a 50:50 split by scene, training, scores.
+"""One evaluation run of the paper's protocol (4.2): a split (the paper's 50:50 by scene, or one of
+`model.experiments.splits`), training, scores.
 
 `run_once` is the one "split, train, score, build meta" for every training mode (the peer
 baseline included): the many-run protocol calls it (locally or in Ray tasks), and so do
 `mtrnn train` and the app's training jobs. Plain arguments in, JSON-serialisable metrics out,
-deterministic for a given (fold, seed).
+deterministic for a given (split, fold, seed).
 """
 
 from __future__ import annotations
@@ -18,31 +19,15 @@ from typing import Any
 import numpy as np
 
 from model import checkpoint
-from model.data import SequenceSet, scene_key
+from model.data import SequenceSet
 from model.encoding.utterance import Lexicon, text_to_phonemes
+from model.experiments.splits import split_indices
 from model.metrics import Transcript, d_avg, d_inter, d_intra, d_rel, parse_slots, summarise
 from model.multimtrnn import CSC_SPACES, csc_vectors
 from model.training import TrainedModel, train
 from model.training.common import Describer, ProgressFn
 
 log = logging.getLogger(__name__)
-
-
-def fold_split(scene_keys: Sequence[str], fold: int, seed: int = 0) -> tuple[list[int], list[int]]:
-    """50:50 split of recordings by scene (4.2): every recording of a scene on the same side.
-
-    `scene_keys` are per recording (recording ids work too: a trailing "-N" is dropped). The
-    scenes are shuffled by a generator seeded with (seed, fold); the first half (rounded up)
-    trains. Returns sorted recording indices (train, test)."""
-    keys = [scene_key(k) for k in scene_keys]
-    scenes = sorted(set(keys))
-    if len(scenes) < 2:
-        raise ValueError(f"a split by scene needs at least 2 scenes, got {len(scenes)}")
-    order = np.random.default_rng([seed, fold]).permutation(len(scenes))
-    train_scenes = {scenes[i] for i in order[: (len(scenes) + 1) // 2]}
-    train_idx = [i for i, k in enumerate(keys) if k in train_scenes]
-    test_idx = [i for i, k in enumerate(keys) if k not in train_scenes]
-    return train_idx, test_idx
 
 
 def slot_vocabularies(utterances: Sequence[str]) -> tuple[list[str], list[str], list[str]] | None:
@@ -134,15 +119,19 @@ def run_once(
     config: Any = None,
     out_dir: str | Path | None = None,
     progress: ProgressFn | None = None,
+    split: str = "scenes",
+    train_scenes: int | None = None,
 ) -> RunResult:
-    """Split `data` by scene (`fold_split(ids, fold)`), train `mode` with `seed` and its `config`
-    (see `model.training.train`), score both sides.
+    """Split `data` (`split_indices(ids, utterances, fold, split, train_scenes=...)`: the paper's
+    50:50 by scene by default; `train_scenes` is the size split's number of training scenes),
+    train `mode` with `seed` and its `config` (see `model.training.train`), score both sides.
 
     As in 4.2, the split depends on the fold only and the seed is the random initialisation, so
     folds x seeds gives the paper's 10 x 10 runs. With `out_dir`, the model is saved there as a
-    checkpoint whose meta carries the metrics and the split."""
+    checkpoint whose meta carries the metrics, the split's name (`split_kind`, `train_scenes`) and
+    its recordings (`split`)."""
     start = time.perf_counter()
-    train_idx, test_idx = fold_split(data.ids, fold, seed=0)
+    train_idx, test_idx = split_indices(data.ids, data.utterances, fold, split, train_scenes=train_scenes)
     train_set, test_set = data.subset(train_idx), data.subset(test_idx)
     trained = train(train_set, mode=mode, config=config, seed=seed, progress=progress)
     metrics = score_split(
@@ -150,12 +139,14 @@ def run_once(
     )
     seconds = time.perf_counter() - start
     meta = run_meta(trained, fold, train_set, test_set, metrics)
+    meta.update({"split_kind": split, "train_scenes": train_scenes})
     meta["seconds_run"] = seconds
     if out_dir is not None:
-        checkpoint.save(trained.model, out_dir, meta, trained.csc)
+        checkpoint.save(trained.model, out_dir, meta, trained.csc, trained.familiarity)
     log.info(
-        "%s fold %d seed %d: test exact %.3f F1 %.3f (%.1f s)",
+        "%s %s fold %d seed %d: test exact %.3f F1 %.3f (%.1f s)",
         mode,
+        split,
         fold,
         seed,
         metrics["test"]["sentence_exact"],

@@ -43,7 +43,8 @@ Engine = Literal["local", "ray"]
 ProgressFn = Callable[[dict[str, Any]], None]
 
 # The function a worker calls, for every training mode:
-# run_once(data, mode, fold, seed, config=None, out_dir=None) -> RunResult.
+# run_once(data, mode, fold, seed, config=None, out_dir=None) -> RunResult, with split= and
+# train_scenes= for a run of another split than the paper's (`model.experiments.splits`).
 DEFAULT_RUNNER = "model.experiments.evaluation:run_once"
 SEED_STRIDE = 1000  # seed of (fold, init) = base_seed + SEED_STRIDE * fold + init
 
@@ -104,8 +105,11 @@ def plan(
     digest: str,
     base_seed: int = 0,
     params: Mapping[str, Any] | None = None,
+    split: str = "scenes",
+    train_scenes: int | None = None,
 ) -> list[RunSpec]:
-    """The K x N runs of one setting (paper 4.2: 10 folds x 10 random initialisations)."""
+    """The K x N runs of one setting (paper 4.2: 10 folds x 10 random initialisations) on one
+    protocol split (`model.experiments.splits`; `train_scenes` for the size split)."""
     fold_ids = range(folds) if isinstance(folds, int) else folds
     return [
         RunSpec(
@@ -117,6 +121,8 @@ def plan(
             config=dict(config),
             params=dict(params or {}),
             data_digest=digest,
+            split=split,
+            train_scenes=train_scenes,
         )
         for fold in fold_ids
         for init in range(inits)
@@ -172,8 +178,10 @@ def execute_run(data: Any, spec: RunSpec, runner: str = DEFAULT_RUNNER) -> RunOu
     try:
         config = _deep_copy(spec.config) if spec.config else None  # runners take the config as a dict
         run_once = resolve(runner)
+        split = {} if spec.split == "scenes" else {"split": spec.split, "train_scenes": spec.train_scenes}
         with tempfile.TemporaryDirectory(prefix="mtrnn-run-") as tmp:
-            result = run_once(data, spec.mode, spec.fold, spec.seed, config=config, out_dir=Path(tmp))
+            out = Path(tmp)
+            result = run_once(data, spec.mode, spec.fold, spec.seed, config=config, out_dir=out, **split)
             files = {p.name: p.read_bytes() for p in sorted(Path(tmp).iterdir()) if p.is_file()}
         artifacts = dict(getattr(result, "artifacts", None) or {})
         return RunOutcome(

@@ -9,7 +9,8 @@ restart with the same command skips every finished run.
 Tables
     configs(hash, json)                          each distinct configuration once
     runs(key, experiment, mode, fold, init, seed, config_hash, params, data_digest,
-         status, attempts, seconds, checkpoint, host, created, finished, error)
+         status, attempts, seconds, checkpoint, host, created, finished, error,
+         split, train_scenes)                   the protocol split (model.experiments.splits)
     metrics(run_key, split, name, value)         split in train / test / mixed (or a sweep's own)
     artifacts(run_key, name, json)               larger per-run results (Csc points for PCA panels)
 """
@@ -51,7 +52,9 @@ CREATE TABLE IF NOT EXISTS runs (
     host TEXT,
     created REAL NOT NULL,
     finished REAL,
-    error TEXT
+    error TEXT,
+    split TEXT NOT NULL DEFAULT 'scenes',
+    train_scenes INTEGER
 );
 CREATE INDEX IF NOT EXISTS runs_experiment ON runs(experiment, status);
 CREATE TABLE IF NOT EXISTS metrics (
@@ -70,6 +73,8 @@ CREATE TABLE IF NOT EXISTS artifacts (
 """
 
 DB_NAME = "runs.sqlite"
+# columns added after the first stores were written: (name, declaration) added to an older store
+ADDED_COLUMNS = (("split", "TEXT NOT NULL DEFAULT 'scenes'"), ("train_scenes", "INTEGER"))
 
 
 def canonical_json(value: Any) -> str:
@@ -101,6 +106,8 @@ class RunSpec:
     config: Mapping[str, Any] = field(default_factory=dict)  # full config as a dict (or {} = defaults)
     params: Mapping[str, Any] = field(default_factory=dict)  # sweep coordinates, e.g. {"psi_s": 5e-4}
     data_digest: str = ""
+    split: str = "scenes"  # model.experiments.splits.SPLITS; the paper's 50:50 by scene by default
+    train_scenes: int | None = None  # the size split's training scenes
 
     @property
     def config_hash(self) -> str:
@@ -108,20 +115,22 @@ class RunSpec:
 
     @property
     def key(self) -> str:
-        """Stable identity of the run: equal specs give equal keys across processes and machines."""
-        return digest(
-            {
-                "experiment": self.experiment,
-                "mode": self.mode,
-                "fold": self.fold,
-                "init": self.init,
-                "seed": self.seed,
-                "config": self.config_hash,
-                "params": dict(self.params),
-                "data": self.data_digest,
-            },
-            length=20,
-        )
+        """Stable identity of the run: equal specs give equal keys across processes and machines.
+        The split joins the identity only when it is not the paper's, so the keys of the runs
+        stored before there were other splits stay theirs."""
+        identity: dict[str, Any] = {
+            "experiment": self.experiment,
+            "mode": self.mode,
+            "fold": self.fold,
+            "init": self.init,
+            "seed": self.seed,
+            "config": self.config_hash,
+            "params": dict(self.params),
+            "data": self.data_digest,
+        }
+        if self.split != "scenes":
+            identity.update({"split": self.split, "train_scenes": self.train_scenes})
+        return digest(identity, length=20)
 
 
 @dataclass
@@ -140,6 +149,17 @@ class RunRecord:
     checkpoint: str | None
     finished: float | None
     metrics: dict[str, dict[str, float]]
+    split: str = "scenes"
+    train_scenes: int | None = None
+
+
+def _add_column(db: sqlite3.Connection, name: str, declaration: str) -> None:
+    """Add a column to an older store's runs table (another process may have just added it)."""
+    try:
+        db.execute(f"ALTER TABLE runs ADD COLUMN {name} {declaration}")
+    except sqlite3.OperationalError as err:
+        if "duplicate column" not in str(err):
+            raise
 
 
 class RunStore:
@@ -153,6 +173,10 @@ class RunStore:
         self.checkpoint_dir = self.run_dir / "checkpoints"
         with self._connect() as db:
             db.executescript(SCHEMA)
+            present = {row["name"] for row in db.execute("PRAGMA table_info(runs)")}
+            for name, declaration in ADDED_COLUMNS:
+                if name not in present:
+                    _add_column(db, name, declaration)
 
     # --- plumbing -------------------------------------------------------------------------------
 
@@ -198,7 +222,8 @@ class RunStore:
                 )
                 db.execute(
                     "INSERT OR IGNORE INTO runs(key, experiment, mode, fold, init, seed, config_hash, params,"
-                    " data_digest, status, created) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?)",
+                    " data_digest, status, created, split, train_scenes)"
+                    " VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, 'pending', ?, ?, ?)",
                     (
                         spec.key,
                         spec.experiment,
@@ -210,6 +235,8 @@ class RunStore:
                         canonical_json(spec.params),
                         spec.data_digest,
                         now,
+                        spec.split,
+                        spec.train_scenes,
                     ),
                 )
 
@@ -283,10 +310,13 @@ class RunStore:
         mode: str | None = None,
         status: str | None = "done",
         keys: list[str] | None = None,
+        split: str | None = None,
     ) -> list[RunRecord]:
-        """Runs with configs and metrics ({split: {name: value}}), by mode, params, fold, init."""
+        """Runs with configs and metrics ({split: {name: value}}), by mode, params, fold, init
+        (`split`: only the runs of that protocol split)."""
         where, args = [], []
-        for column, value in (("r.experiment", experiment), ("r.mode", mode), ("r.status", status)):
+        filters = (("r.experiment", experiment), ("r.mode", mode), ("r.status", status), ("r.split", split))
+        for column, value in filters:
             if value is not None:
                 where.append(f"{column} = ?")
                 args.append(value)
@@ -296,7 +326,7 @@ class RunStore:
         sql = (
             "SELECT r.*, c.json AS config_json FROM runs r JOIN configs c ON c.hash = r.config_hash"
             + (" WHERE " + " AND ".join(where) if where else "")
-            + " ORDER BY r.mode, r.params, r.fold, r.init"
+            + " ORDER BY r.mode, r.params, r.train_scenes, r.fold, r.init"
         )
         with self._read() as db:
             rows = db.execute(sql, args).fetchall()
@@ -320,6 +350,8 @@ class RunStore:
                 checkpoint=r["checkpoint"],
                 finished=r["finished"],
                 metrics=metrics.get(r["key"], {}),
+                split=r["split"],
+                train_scenes=r["train_scenes"],
             )
             for r in rows
         ]

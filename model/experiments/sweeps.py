@@ -36,12 +36,16 @@ def psi_s_specs(
     config: Mapping[str, Any],
     digest: str,
     base_seed: int = 0,
+    split: str = "scenes",
+    train_scenes: int | None = None,
 ) -> list[RunSpec]:
-    """Every (psi_s, fold, init) run; the same folds and seeds for every value (paired design)."""
+    """Every (psi_s, fold, init) run; the same folds and seeds for every value (paired design), on
+    one protocol split (`model.experiments.splits`; the paper's by default)."""
     specs: list[RunSpec] = []
     for value in values:
         cfg = apply_overrides(config, {"training.psi_s": float(value)})
-        specs += plan("psi_s", mode, folds, inits, cfg, digest, base_seed, params={"psi_s": float(value)})
+        where = {"params": {"psi_s": float(value)}, "split": split, "train_scenes": train_scenes}
+        specs += plan("psi_s", mode, folds, inits, cfg, digest, base_seed, **where)
     return specs
 
 
@@ -65,12 +69,15 @@ def cosine_run(
     config: Mapping[str, Any] | None = None,
     out_dir: Path | None = None,
 ) -> CosineRunResult:
-    """Engine runner for one run of the cosine experiment (3.2.2): `config["psi"]` is its psi (the
-    engine's runner signature carries everything; the experiment needs no data)."""
-    from model.experiments.cosine import train_cosine_once
+    """Engine runner for one run of the cosine experiment (3.2.2): `config["psi"]` is its psi, the
+    optional "optimiser", "zeta_gain" and "max_epochs" fields of its `CosineSetup` (the engine's
+    runner signature carries everything; the experiment needs no data)."""
+    from model.experiments.cosine import CosineSetup, train_cosine_once
 
     started = time.perf_counter()
-    run = train_cosine_once(float((config or {})["psi"]), seed)
+    config = dict(config or {})
+    setup = CosineSetup(**{k: config[k] for k in ("optimiser", "zeta_gain", "max_epochs") if k in config})
+    run = train_cosine_once(float(config["psi"]), seed, setup)
     return CosineRunResult(
         metrics={
             "cosine": {
@@ -87,9 +94,15 @@ def cosine_run(
     )
 
 
-def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list[RunSpec]:
+def cosine_specs(
+    values: Sequence[float], runs: int, base_seed: int = 0, rule: Mapping[str, Any] | None = None
+) -> list[RunSpec]:
     """`runs` seeded runs per psi, the same seeds for every psi (paired, as `model.experiments.cosine`);
-    the config {"psi": value} carries the value to the runner."""
+    the config {"psi": value, **rule} carries the value and the learning rule ({"optimiser",
+    "zeta_gain"}, default the cosine setup's) to the runner."""
+    from model.experiments.cosine import CosineSetup
+
+    rule = dict(rule or {"optimiser": CosineSetup.optimiser, "zeta_gain": CosineSetup.zeta_gain})
     return [
         RunSpec(
             experiment="cosine",
@@ -97,8 +110,8 @@ def cosine_specs(values: Sequence[float], runs: int, base_seed: int = 0) -> list
             fold=i,
             init=r,
             seed=base_seed + r,
-            config={"psi": float(v)},
-            params={"psi": float(v)},
+            config={"psi": float(v), **rule},
+            params={"psi": float(v), **rule},
         )
         for i, v in enumerate(values)
         for r in range(runs)
@@ -141,8 +154,19 @@ def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list
     return rows
 
 
-def cosine_table(runs: Sequence[RunRecord]) -> list[dict[str, Any]]:
-    """Per psi: mean and standard error over runs of epochs, d_avg and d_rel (Fig. 3 a, b)."""
+def cosine_rule(run: RunRecord) -> tuple[str, float]:
+    """(optimiser, zeta_gain) a cosine run learned with; runs stored before the paper's rule was
+    selectable learned with sign-based RPROP."""
+    return str(run.params.get("optimiser", "rprop")), float(run.params.get("zeta_gain", 1.0))
+
+
+def cosine_table(runs: Sequence[RunRecord], rule: tuple[str, float] | None = None) -> list[dict[str, Any]]:
+    """Per psi: mean and standard error over runs of epochs, d_avg and d_rel (Fig. 3 a, b), of the
+    runs learned with `rule` (optimiser, zeta_gain; default the cosine setup's)."""
+    from model.experiments.cosine import CosineSetup
+
+    rule = rule or (CosineSetup.optimiser, CosineSetup.zeta_gain)
+    runs = [r for r in runs if cosine_rule(r) == rule]
     rows = []
     for value, group in _by_value(runs, "psi"):
         row: dict[str, Any] = {"psi": value, "runs": len(group)}

@@ -6,6 +6,7 @@
 
 Every mode is a function `(data, config, seed, progress) -> TrainedModel` that takes its own
 config (a dataclass, its dict, or None for the defaults); what they share is in `common.py`.
+`train()` also fits the model's `Familiarity` (`model/familiarity.py`) on the training recordings.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import torch
 
 from model.config import MultiMTRNNConfig
 from model.data import SequenceSet
+from model.familiarity import Familiarity, vision_columns
 from model.training.common import ProgressFn, TrainedModel
 from model.training.end_to_end import train_end_to_end
 from model.training.faithful import train_faithful
@@ -52,6 +54,10 @@ def train(
     start = time.perf_counter()
     result = MODES[mode](data, config, seed, progress)
     result.meta.setdefault("seconds_total", time.perf_counter() - start)
+    if len(data) > 1:  # familiarity calibrates on leave-one-out distances: it needs two recordings
+        result.familiarity = Familiarity.fit(
+            data.proprioception, data.vision, ids=data.ids, vision_columns=vision_columns(result.meta)
+        )
     log.info(
         "trained %s (seed %d) on %d sequences in %.1f s", mode, seed, len(data), time.perf_counter() - start
     )

@@ -12,10 +12,12 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from model.config import MultiMTRNNConfig, TrainingConfig, mode_options
+from model.config import LEARNING_RULES, MultiMTRNNConfig, TrainingConfig, mode_options
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES, Lexicon, encode_utterance
+from model.familiarity import Familiarity
 from model.multimtrnn import Description, MultiMTRNN, pad_sequences
+from model.training.adaptive_rates import AdaptiveRates
 
 ProgressFn = Callable[[dict], None]
 GENERATION_MARGIN = 10  # steps of silence after the longest training utterance (5 phoneme slots)
@@ -41,6 +43,7 @@ class TrainedModel:
     history: list[dict]  # {"stage", "epoch", "loss"} every `progress_every` epochs
     meta: dict  # mode, seed, ids, lexicon words, config, assemblies spec, seconds per stage
     csc: dict[str, np.ndarray] = field(default_factory=dict)  # learned training tables (c_0, c_T)
+    familiarity: Familiarity | None = None  # how far a recording lies from the training set (`train`)
 
     @property
     def lexicon(self) -> Lexicon:
@@ -149,15 +152,26 @@ def prepare(data: SequenceSet, config: MultiMTRNNConfig | dict | None) -> MultiM
 
 
 def make_optimiser(groups: list[dict], training: TrainingConfig) -> torch.optim.Optimizer:
-    """RPROP (3.1.4) or Adam over parameter groups; a group's optional "scale" multiplies its
-    rates (eq. 12: c_T's step is psi * zeta)."""
+    """The learning rule of `training.optimiser` over parameter groups (None: sign-based "rprop",
+    the improved modes' rule; faithful resolves None to "paper" itself):
+
+    - "paper": `AdaptiveRates`, the paper's rates times gradients (eqs. 7-10, 12). A group with
+      "context_of": net is a c_0 or c_T table whose rate is zeta of `net` (eq. 10) times its
+      optional "scale" (eq. 12: psi).
+    - "rprop": `torch.optim.Rprop`, rates times the gradient's sign; a group's "scale" multiplies
+      its rates (eq. 12's psi as a step size: a gradient scale would do nothing under a sign rule).
+    - "adam": Adam, "scale" multiplies the group's learning rate.
+    """
+    rule = rule_of(training)
     out = []
     for g in groups:
         scale = g.get("scale", 1.0)
         params = [p for p in g["params"] if p.requires_grad]
         if not params:
             continue
-        if training.optimiser == "rprop":
+        if rule == "paper":
+            out.append({"params": params, "scale": scale, "context_of": g.get("context_of")})
+        elif rule == "rprop":
             out.append(
                 {
                     "params": params,
@@ -167,16 +181,37 @@ def make_optimiser(groups: list[dict], training: TrainingConfig) -> torch.optim.
             )
         else:
             out.append({"params": params, "lr": training.adam_lr * scale})
-    if training.optimiser == "rprop":
+    if rule == "paper":
+        return AdaptiveRates(
+            out,
+            lr=training.lr,
+            etas=(training.xi_decrease, training.xi_increase),
+            rate_bounds=(training.lr_min, training.lr_max),
+            zeta_gain=training.zeta_gain,
+        )
+    if rule == "rprop":
         return torch.optim.Rprop(
             out,
             lr=training.lr,
             etas=(training.xi_decrease, training.xi_increase),
             step_sizes=(training.lr_min, training.lr_max),
         )
-    if training.optimiser == "adam":
-        return torch.optim.Adam(out, lr=training.adam_lr)
-    raise ValueError(f"unknown optimiser {training.optimiser!r} (rprop or adam)")
+    return torch.optim.Adam(out, lr=training.adam_lr)
+
+
+def rule_of(training: TrainingConfig) -> str:
+    """The learning rule `training` names (None: "rprop"); ValueError for an unknown one."""
+    rule = training.optimiser or "rprop"
+    if rule not in LEARNING_RULES:
+        raise ValueError(f"unknown optimiser {rule!r} ({', '.join(LEARNING_RULES)})")
+    return rule
+
+
+def reduction_of(training: TrainingConfig) -> str:
+    """How a batch's errors combine: summed over sequences under the paper's rule (eqs. 7-8
+    accumulate the error of the whole training set; with rates times gradients the sum is not a
+    mere scale), averaged otherwise."""
+    return "mean"
 
 
 def uniform(shape: tuple[int, ...], scale: float, generator: torch.Generator) -> Tensor:

@@ -3,26 +3,26 @@ paper leaves open are in docs/experiments/faithful.md:
 1. MTRNN_a with a learnable c_0 per training *sentence* (3.3: the Csc "had to be trained
    individually for every sentence"; a scene's four recordings share one utterance, hence one
    c_a,0), init +-0.01, teacher forcing alpha = 0.1 (eq. 5), KLD on the softmax IO, full-batch
-   BPTT, RPROP on weights, biases and c_0 (eqs. 7-9).
+   BPTT, every element learning by its adapted rate times its gradient (eqs. 7-9), c_0's rate
+   zeta following the weights' (eq. 10, `model.training.adaptive_rates`).
 2. MTRNN_s and MTRNN_v with a learnable c_T per training recording (init +-1) and self-organisation
-   forcing psi (eqs. 11-12): c_T sits in its own RPROP group whose rates are the weights' rates
-   times psi (lr = psi * 0.05, rates in [psi * 1e-6, psi * 1.0]); psi = 0 leaves c_T fixed.
+   forcing psi (eqs. 11-12): the weights learn from (1 - psi) of the Csc error, c_T steps by
+   psi * zeta times its gradient; psi = 0 leaves c_T fixed.
 3. The cell assemblies fitted by LMS (eqs. 16-17) from the encoders' abstraction c_s,T, c_v,T of
    each training recording (what the CAs will see when describing a scene; the learned targets
-   c_T are only what the encoders were pulled towards) to the learned c_a,0 of its utterance.
+   c_T are only what the encoders were pulled towards) to the learned c_a,0 of its utterance, by
+   the same rule.
 
-`FaithfulOptions` names the departures from that reading (all off by default).
-
-Eq. (10) adapts zeta (c_0's rate) in proportion to the mean rate of the weights of unit i; we
-give c_0 RPROP's own per-element rate adaptation instead (same initial rate, same xi+, xi- and
-bounds), which needs no extra parameters either and follows the same sign rule.
+Under the paper's rule the errors of all training sequences are summed (eqs. 7-8 accumulate them);
+`TrainingConfig.optimiser` = "rprop" (sign-based RPROP) or "adam" are named alternatives, and
+`FaithfulOptions` names the other departures from that reading (all off by default).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Literal
 
 import torch
@@ -30,7 +30,7 @@ from torch import Tensor, nn
 
 from model.config import MultiMTRNNConfig, TrainingConfig
 from model.data import SequenceSet
-from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
+from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, reduce, scaled_logistic
 from model.multimtrnn import MultiMTRNN
 from model.training.common import (
     Batch,
@@ -42,6 +42,7 @@ from model.training.common import (
     encode_utterances,
     make_batch,
     make_optimiser,
+    reduction_of,
     uniform,
 )
 
@@ -60,12 +61,14 @@ def train_auditory(
     `report_rows` (optional) picks the c_0 rows the progress reports show, e.g. one per recording
     when the sequences are the distinct utterances. Returns the learned c_0 table [B, csc]."""
     c0 = nn.Parameter(uniform((targets.shape[0], net.cfg.csc), net.cfg.csc_init, generator))
-    optimiser = make_optimiser([{"params": [*net.parameters(), c0]}], training)
+    optimiser = make_optimiser(
+        [{"params": list(net.parameters())}, {"params": [c0], "context_of": net}], training
+    )
     epochs = training.epochs_auditory if epochs is None else epochs
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         output = net.generate(c0, targets.shape[1], teacher=targets, alpha=training.alpha)
-        loss = kl_divergence(targets, output)
+        loss = kl_divergence(targets, output, reduction=reduction_of(training))
         loss.backward()
         optimiser.step()
         report("auditory", epoch, epochs, loss.item(), c0 if report_rows is None else c0[report_rows])
@@ -93,22 +96,25 @@ def train_encoder(
     rows = inputs.shape[0] if groups is None else int(groups.max()) + 1
     c_t = nn.Parameter(uniform((rows, net.cfg.csc), net.cfg.csc_init, generator), requires_grad=psi > 0)
     optimiser = make_optimiser(
-        [{"params": list(net.parameters())}, {"params": [c_t], "scale": psi}], training
+        [{"params": list(net.parameters())}, {"params": [c_t], "scale": psi, "context_of": net}], training
     )
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         targets = c_t if groups is None else c_t[groups]
-        loss = context_abstraction_loss(net, net.abstract(inputs, lengths), targets, psi)
+        produced = net.abstract(inputs, lengths)
+        loss = context_abstraction_loss(net, produced, targets, psi, reduction_of(training))
         loss.backward()
         optimiser.step()
         report(stage, epoch, epochs, loss.item(), targets)
     return c_t
 
 
-def assemblies_loss(assemblies: nn.Module, c_s: Tensor, c_v: Tensor, c_a0: Tensor) -> Tensor:
+def assemblies_loss(
+    assemblies: nn.Module, c_s: Tensor, c_v: Tensor, c_a0: Tensor, reduction: str = "mean"
+) -> Tensor:
     """LMS between y = f(z) and f(c_a,0) (eq. 16), z = the assemblies' output (eq. 17)."""
     y = scaled_logistic(assemblies(c_s, c_v))
-    return 0.5 * ((y - scaled_logistic(c_a0)) ** 2).sum(dim=1).mean()
+    return reduce(0.5 * ((y - scaled_logistic(c_a0)) ** 2).sum(dim=1), reduction)
 
 
 def fit_assemblies(
@@ -126,7 +132,7 @@ def fit_assemblies(
     epochs = training.epochs_assemblies if epochs is None else epochs
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
-        loss = assemblies_loss(assemblies, c_s, c_v, c_a0)
+        loss = assemblies_loss(assemblies, c_s, c_v, c_a0, reduction_of(training))
         loss.backward()
         optimiser.step()
         report("assemblies", epoch, epochs, loss.item())
@@ -219,6 +225,7 @@ class _Staged:
     """One faithful training: the model, its batch and the stages' shared bookkeeping."""
 
     def __init__(self, data: SequenceSet, config: MultiMTRNNConfig, seed: int, progress: ProgressFn | None):
+        config.training = replace(config.training, optimiser=config.training.optimiser or "paper")
         self.data, self.config, self.seed = data, config, seed
         self.training = config.training
         self.model = MultiMTRNN(config, seed=seed)

@@ -1,8 +1,10 @@
 """`mtrnn describe RECORDING [--json]`: what the served model says about a recording file.
 
 The same code path as ``POST /api/describe``, so the answer is the same. It loads only what
-describing needs, the model and its lexicon, not the corpus (whose words are read only for a
-model whose meta.json has no lexicon). The answer goes to stdout; errors and logs to stderr.
+describing needs, the model and its lexicon; the corpus is read only for a model whose meta.json
+has no lexicon (its words) or whose checkpoint has no familiarity (the recordings it learned
+from, `server.services.models`); without a corpus such a model answers without familiarity.
+The answer goes to stdout; errors and logs to stderr.
 """
 
 from __future__ import annotations
@@ -38,9 +40,15 @@ def describer(settings: Settings) -> DescribeService:
     from server.services.errors import Unavailable
     from server.services.models import ModelRegistry
 
+    def recordings() -> dict:
+        try:
+            return Corpus.load(settings).entries
+        except FileNotFoundError:
+            return {}
+
     no_scenes = Corpus(Recordings(entries=[], seed=0))
     try:
-        models = ModelRegistry(settings.models_dir, [], settings.model, None)
+        models = ModelRegistry(settings.models_dir, [], settings.model, None, recordings=recordings)
     except Unavailable:  # a model without a lexicon of its own speaks the corpus's words
         models = ModelRegistry.serving(settings, Corpus.load(settings))
     return DescribeService(no_scenes, models)
@@ -71,5 +79,10 @@ def run(args: argparse.Namespace) -> int:
             verdict = "correct" if answer.correct else "differs"
             print(f"expected: {answer.expected} ({verdict})")
         print(f"phonemes: {' '.join(answer.phonemes)}")
+        if answer.familiarity is not None:
+            prop, vis = answer.familiarity.proprioception, answer.familiarity.vision
+            print(f"familiarity: proprioception {100 * prop:.0f} %, vision {100 * vis:.0f} %")
+        for warning in answer.warnings:
+            print(f"warning: {warning}")
         print(f"model: {answer.model}; {answer.timings.total_ms:.0f} ms")
     return 0

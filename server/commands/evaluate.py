@@ -3,6 +3,13 @@
     mtrnn evaluate --mode end_to_end --folds 4 --inits 2
     mtrnn evaluate --mode faithful --folds 2 --inits 1 --engine ray --set training.epochs_auditory=50
     mtrnn evaluate --mode peer --folds 10 --inits 10 --engine ray --address ray://head:10001 --json
+    mtrnn evaluate --mode end_to_end --split objects --folds 4 --inits 2      (held-out objects)
+    mtrnn evaluate --mode end_to_end --split size --train-scenes 8 16 32 48 --folds 4 --inits 2
+
+`--split` picks the protocol split (`model.experiments.splits`): `scenes`, the paper's 50:50 by
+scene (the default); `objects` and `action-object`, Latin squares of held-out pairs with 4 folds;
+`size`, the training-size curve: one protocol per `--train-scenes` value, all against the same
+novel scenes of each fold.
 
 Results go to the run store in --run-dir (default: `Settings.run_dir`, $MTRNN_RUN_DIR or runs/;
 the app's own evaluations keep theirs apart, in its user folder); running the same command again
@@ -50,6 +57,7 @@ def add_assignments(parser: argparse.ArgumentParser, flag: str, dest: str, text:
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("evaluate", help="K folds x N inits of one training mode (resumable)")
     parser.add_argument("--mode", required=True, help="faithful, end_to_end or peer")
+    add_split_arguments(parser, many=True)
     parser.add_argument(
         "--epochs-scale",
         type=float,
@@ -58,6 +66,38 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     add_engine_arguments(parser)
     parser.set_defaults(func=run)
+
+
+def add_split_arguments(parser: argparse.ArgumentParser, many: bool) -> None:
+    """--split and --train-scenes (`many`: a list of sizes, one protocol each), for evaluate and train."""
+    from model.experiments.splits import SPLITS, TRAINING_SIZES
+
+    parser.add_argument(
+        "--split",
+        choices=SPLITS,
+        default="scenes",
+        help="protocol split: scenes (the paper's 50:50, default), objects or action-object (held-out "
+        "pairs, 4 folds), size (the training-size curve, with --train-scenes)",
+    )
+    sizes = " ".join(map(str, TRAINING_SIZES))
+    parser.add_argument(
+        "--train-scenes",
+        type=int,
+        nargs="+" if many else None,
+        default=None,
+        help=f"size split: the scenes to train on ({'the curve: ' + sizes if many else 'e.g. 16'})",
+    )
+
+
+def checked_split(split: str, train_scenes: int | None, folds: int = 1, fold: int = 0) -> None:
+    """`server.jobs.bounds.check_split` for a command: its message ends the command."""
+    from server.jobs.bounds import check_split
+    from server.services.errors import Invalid
+
+    try:
+        check_split(split, train_scenes, folds=folds, fold=fold)
+    except Invalid as err:
+        raise SystemExit(f"error: {err}") from None
 
 
 def parse_assignments(items: list[str]) -> dict[str, Any]:
@@ -139,18 +179,33 @@ def progress_bar(total: int, already: int) -> tuple[tqdm, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import data_digest, plan, run_protocol, summarise
-
+    sizes = args.train_scenes or [None]
+    for size in sizes:
+        checked_split(args.split, size, folds=args.folds)
     config = build_config(parse_overrides(args.overrides), args.mode, args.epochs_scale)
     data = load_data(args.corpus)
     store = run_store(args.run_dir)
-    specs = plan("evaluate", args.mode, args.folds, args.inits, config, data_digest(data), args.seed)
+    answers = [evaluate_split(args, config, data, store, size) for size in sizes]
+    if args.json:
+        print(json.dumps(answers[0] if len(answers) == 1 else answers, indent=1, sort_keys=True))
+    else:
+        for answer in answers:
+            print_summary(answer)
+    return 1 if any(a["failed"] for a in answers) else 0
+
+
+def evaluate_split(args: argparse.Namespace, config: dict, data: Any, store: Any, size: int | None) -> dict:
+    """One protocol (K folds x N inits) on the command's split (and `size` training scenes)."""
+    from model.experiments.protocol import data_digest, plan, run_protocol, summarise
+
+    where = {"split": args.split, "train_scenes": size}
+    specs = plan("evaluate", args.mode, args.folds, args.inits, config, data_digest(data), args.seed, **where)
     result = with_progress(
         store, specs, lambda update: run_protocol(data, specs, store, **engine_options(args, update))
     )
-    summary = summarise(result.runs)
-    answer = {
+    return {
         "mode": args.mode,
+        **where,
         "folds": args.folds,
         "inits": args.inits,
         "engine": args.engine,
@@ -159,7 +214,7 @@ def run(args: argparse.Namespace) -> int:
         "skipped": result.skipped,
         "failed": len(result.failed),
         "seconds": result.seconds,
-        "summary": summary,
+        "summary": summarise(result.runs),
         "runs": [
             {
                 "key": r.key,
@@ -172,18 +227,16 @@ def run(args: argparse.Namespace) -> int:
             for r in result.runs
         ],
     }
-    if args.json:
-        print(json.dumps(answer, indent=1, sort_keys=True))
-    else:
-        print_summary(answer)
-    return 1 if result.failed else 0
 
 
 def print_summary(answer: dict) -> None:
+    sized = f", {answer['train_scenes']} training scenes" if answer["train_scenes"] else ""
+    counts = (
+        f"{answer['executed']} trained now, {answer['skipped']} from the store, {answer['failed']} failed"
+    )
     print(
-        f"{answer['mode']}: {len(answer['runs'])} runs ({answer['executed']} trained now, "
-        f"{answer['skipped']} "
-        f"from the store, {answer['failed']} failed) in {answer['seconds']:.0f} s; store {answer['run_dir']}"
+        f"{answer['mode']} on the {answer['split']} split{sized}: {len(answer['runs'])} runs ({counts}) "
+        f"in {answer['seconds']:.0f} s; store {answer['run_dir']}"
     )
     names = ("sentence_exact", "f1", "edit_distance", "word_accuracy")
     print(f"{'split':<6} " + " ".join(f"{n:>22}" for n in names))

@@ -14,6 +14,7 @@ import json
 import math
 from pathlib import Path
 
+from server.commands.cosine import add_rule_arguments
 from server.commands.evaluate import (
     add_engine_arguments,
     build_config,
@@ -46,6 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     cosine.add_argument("--run-dir", type=Path, default=None)
     cosine.add_argument("--seed", type=int, default=0)
     cosine.add_argument("--json", action="store_true")
+    add_rule_arguments(cosine)
     cosine.set_defaults(func=run_cosine)
 
 
@@ -93,13 +95,14 @@ def run_cosine(args: argparse.Namespace) -> int:
 
     values = args.values or list(PSI_COSINE_PAPER)
     store = run_store(args.run_dir)
-    specs = cosine_specs(values, args.runs, args.seed)
+    rule = {"optimiser": args.optimiser, "zeta_gain": args.zeta_gain}
+    specs = cosine_specs(values, args.runs, args.seed, rule)
     result = with_progress(
         store,
         specs,
         lambda update: run_protocol(None, specs, store, runner=COSINE_RUNNER, **engine_options(args, update)),
     )
-    table = cosine_table(result.runs)
+    table = cosine_table(result.runs, (args.optimiser, args.zeta_gain))
     if args.json:
         print(json.dumps({"table": table, "failed": len(result.failed)}, indent=1))
     else:

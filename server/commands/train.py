@@ -1,6 +1,11 @@
 """`mtrnn train`: train one model on one fold of the corpus and save it as a checkpoint.
 
     mtrnn train --mode end_to_end --out models/quick --epochs-scale 0.1
+    mtrnn train --mode end_to_end --split objects --fold 1 --out models/objects-1
+
+`--split` picks the protocol split of the fold (`model.experiments.splits`, as `mtrnn evaluate`):
+the paper's 50:50 by scene by default, `objects` / `action-object` (folds 0..3), or `size` with
+`--train-scenes`.
 
 `--epochs-scale` multiplies every epoch count the mode reads (`server.jobs.presets.scale_epochs`:
 faithful's stages, end_to_end's options, peer's epochs). A progress bar per stage (and per attempt
@@ -16,7 +21,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from server.commands.evaluate import add_assignments, parse_assignments
+from server.commands.evaluate import add_assignments, add_split_arguments, checked_split, parse_assignments
 
 logger = logging.getLogger(__name__)
 
@@ -26,7 +31,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--mode", default="faithful", help="training mode: faithful (the paper), end_to_end or peer"
     )
-    parser.add_argument("--fold", type=int, default=0, help="which 50:50 split by scene")
+    parser.add_argument(
+        "--fold", type=int, default=0, help="which fold of the split (50:50 by scene by default)"
+    )
+    add_split_arguments(parser, many=False)
     parser.add_argument("--seed", type=int, default=0, help="random initialisation")
     parser.add_argument("--out", type=Path, required=True, help="checkpoint directory to write")
     parser.add_argument(
@@ -96,6 +104,7 @@ def _train(args: argparse.Namespace) -> int:
     if args.mode not in MODES:
         print(f"error: unknown mode {args.mode!r}; available: {', '.join(sorted(MODES))}")
         return 2
+    checked_split(args.split, args.train_scenes, fold=args.fold)
     try:
         config = _config(args)
         corpus = load_corpus(args.corpus)
@@ -104,9 +113,9 @@ def _train(args: argparse.Namespace) -> int:
         return 2
     bars = StageBars()
     try:
-        result = run_once(
-            corpus.training_data(), args.mode, args.fold, args.seed, config, out_dir=args.out, progress=bars
-        )
+        split = {"split": args.split, "train_scenes": args.train_scenes}
+        data = corpus.training_data()
+        result = run_once(data, args.mode, args.fold, args.seed, config, args.out, bars, **split)
     except ValueError as err:  # e.g. an unknown --option
         print(f"error: {err}")
         return 2

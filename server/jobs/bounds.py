@@ -8,6 +8,9 @@ type and range (the same for every section it appears in); the sizes fixed by th
 layers, the peer's input sizes) and T_a (set by training) are not overridable. After the ranges,
 the whole config is built once, so that rules across fields (|Csc| <= |Cs|, options that exclude
 each other) are refused too.
+
+A job's protocol split (`model.experiments.splits`) is checked with `check_split`: a Latin-square
+split has 4 folds, the training-size curve needs its number of training scenes (and only it takes one).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from typing import Any
 
 from model.config import MultiMTRNNConfig, mode_options
 from model.experiments.protocol import apply_overrides, default_config
+from model.experiments.splits import SPLITS, SQUARE_FOLDS
 from model.training.end_to_end.options import EndToEndOptions
 from model.training.faithful import FaithfulOptions
 from model.training.peer import PeerConfig
@@ -27,6 +31,8 @@ from server.settings import CORES
 
 MAX_EPOCHS = 5000  # per stage (Table 1's longest is 2000)
 MAX_UNITS = 512  # per layer (Table 1's largest is 80)
+MAX_TRAIN_SCENES = 48  # the size split trains on at most the 3 quarters of the 64 scenes it does not test
+SQUARE_SPLITS = ("objects", "action-object")  # Latin squares: folds 0..SQUARE_FOLDS - 1
 
 
 @dataclass(frozen=True)
@@ -191,3 +197,25 @@ def check_overrides(
     except (TypeError, ValueError) as err:
         raise Invalid(f"overrides: {err}") from None
     return config
+
+
+def check_split(split: str, train_scenes: int | None = None, folds: int = 1, fold: int = 0) -> None:
+    """Invalid unless `split` is one of `SPLITS` that has `folds` folds and fold `fold` (a
+    Latin-square split has SQUARE_FOLDS) and, for the size split and only for it, 1..MAX_TRAIN_SCENES
+    training scenes."""
+    if split not in SPLITS:
+        raise Invalid(f"split must be one of {', '.join(SPLITS)}, got {_shown(split)}")
+    if split in SQUARE_SPLITS and (folds > SQUARE_FOLDS or fold >= SQUARE_FOLDS):
+        asked = f"{folds} folds" if folds > SQUARE_FOLDS else f"fold {fold}"
+        raise Invalid(
+            f"the {split} split has {SQUARE_FOLDS} folds, 0..{SQUARE_FOLDS - 1} (its Latin squares "
+            f"cover every pair in {SQUARE_FOLDS}): ask for at most {SQUARE_FOLDS} folds, got {asked}"
+        )
+    if split == "size":
+        if not 1 <= (train_scenes or 0) <= MAX_TRAIN_SCENES:
+            raise Invalid(
+                f"the size split needs train_scenes, the scenes to train on, in 1..{MAX_TRAIN_SCENES} "
+                f"(the curve: 8, 16, 32, 48), got {_shown(train_scenes)}"
+            )
+    elif train_scenes is not None:
+        raise Invalid(f"train_scenes is the size split's; the {split} split trains on its own scenes")

@@ -7,7 +7,9 @@
     cosine    the cosine experiment of 3.2.2 for one psi, live in lesson 5 (`train_cosine_once`)
 
 A job's config is its mode's defaults, scaled by its epoch preset (`presets`), then its overrides,
-every key and value checked before it is queued (`bounds`).
+every key and value checked before it is queued (`bounds`). Both process kinds take a protocol
+`split` (`model.experiments.splits`: "scenes", the paper's 50:50, by default) and, for the size
+split, `train_scenes`, checked before the job is queued too (`bounds.check_split`).
 
 Train and evaluate run in a child process and are kept in the jobs table; a cosine run is small,
 runs in a thread of the server and is kept in memory (a run is deterministic in (psi, seed), so
@@ -42,7 +44,7 @@ import numpy as np
 
 from model.experiments.protocol import default_config
 from model.metrics import CscPCA
-from server.jobs.bounds import check_overrides
+from server.jobs.bounds import check_overrides, check_split
 from server.jobs.presets import PRESETS, scale_epochs
 from server.lessons.abstracting import snapshot
 from server.services.errors import Invalid
@@ -64,6 +66,11 @@ def corpus_data(corpus_path: str | None = None) -> Any:
 def user_runs(settings: Settings) -> Path:
     """The run store of the app's evaluation jobs."""
     return settings.user_dir / "runs"
+
+
+def _split(params: dict) -> dict:
+    """The job's protocol split as `run_once` and `plan` take it: {"split", "train_scenes"}."""
+    return {"split": params.get("split") or "scenes", "train_scenes": params.get("train_scenes")}
 
 
 def _config(params: dict) -> dict:
@@ -123,15 +130,25 @@ def validate_train(params: dict, job_id: str, settings: Settings) -> dict:
     if params.get("mode") not in TRAIN_MODES:
         raise Invalid(f"a training job needs mode in {TRAIN_MODES}, got {params.get('mode')!r}")
     _config(params)
-    fold, seed = params.get("fold", 0), params.get("seed", 0)
-    name = params.get("name") or f"{params['mode'].replace('_', '-')}-f{fold}-s{seed}-{job_id[-6:]}"
+    fold, seed, split = params.get("fold", 0), params.get("seed", 0), _split(params)
+    check_split(split["split"], split["train_scenes"], fold=fold)
+    mode = params["mode"].replace("_", "-")
+    name = params.get("name") or f"{mode}-{_split_label(split)}f{fold}-s{seed}-{job_id[-6:]}"
     return {**params, "job_id": job_id, "name": name}
+
+
+def _split_label(split: dict) -> str:
+    """A default model name's part: none for the paper's split, else e.g. "objects-" or "size16-"."""
+    if split["split"] == "scenes":
+        return ""
+    return f"{split['split']}{split['train_scenes'] or ''}-"
 
 
 def run_train(params: dict, emit: Emit, data: Any, settings: Settings) -> dict:
     """Split, train, score and save one model (`run_once`); the job's id joins its meta.json."""
     from model import checkpoint
-    from model.experiments.evaluation import fold_split, run_once
+    from model.experiments.evaluation import run_once
+    from model.experiments.splits import split_indices
     from model.metrics import parse_slots
 
     fold, seed, out = (
@@ -139,9 +156,11 @@ def run_train(params: dict, emit: Emit, data: Any, settings: Settings) -> dict:
         int(params.get("seed", 0)),
         user_models(settings) / params["name"],
     )
-    train_idx, _ = fold_split(data.ids, fold, seed=0)
+    split = _split(params)
+    train_idx, _ = split_indices(data.ids, data.utterances, fold, **split)
     labels = [parse_slots(data.utterances[i])["action"] or "?" for i in train_idx]
-    run = run_once(data, params["mode"], fold, seed, _config(params), out, _ProgressRelay(emit, labels))
+    relay = _ProgressRelay(emit, labels)
+    run = run_once(data, params["mode"], fold, seed, _config(params), out, relay, **split)
     meta_path = out / checkpoint.META
     meta = {**json.loads(meta_path.read_text()), "job": params.get("job_id")}
     partial = meta_path.with_suffix(".partial")
@@ -157,6 +176,8 @@ def validate_evaluate(params: dict, job_id: str, settings: Settings) -> dict:
     if params.get("mode") not in EVALUATE_MODES:
         raise Invalid(f"an evaluation job needs mode in {EVALUATE_MODES}, got {params.get('mode')!r}")
     _config(params)
+    split = _split(params)
+    check_split(split["split"], split["train_scenes"], folds=int(params.get("folds", 1)))
     return {**params, "job_id": job_id}
 
 
@@ -166,7 +187,8 @@ def run_evaluate(params: dict, emit: Emit, data: Any, settings: Settings) -> dic
     from model.experiments.runstore import RunStore
 
     folds, inits, seed = int(params["folds"]), int(params["inits"]), int(params.get("seed", 0))
-    specs = plan("evaluate", params["mode"], folds, inits, _config(params), data_digest(data), seed)
+    digest = data_digest(data)
+    specs = plan("evaluate", params["mode"], folds, inits, _config(params), digest, seed, **_split(params))
 
     store = RunStore(user_runs(settings))
     pace = _Pace()

@@ -1,7 +1,14 @@
 """Lesson 7, generalising: how one model describes every scene, training vs novel scenes, and for
-novel scenes whether their object and action pairings were ever seen in training."""
+novel scenes whether their object and action pairings were ever seen in training.
+
+For a model trained on the `objects` split (`model.experiments.splits`: four colour x shape objects
+held out per fold, its meta's `split_kind`), the grid of its held-out objects: which colour word
+and which shape word it said for each. The models trained on that split are listed
+(`objects_models`), so that the lesson uses one that exists, or offers to train one."""
 
 from __future__ import annotations
+
+from collections import Counter
 
 from data.scenario import ACTIONS, COLOURS, SHAPES
 from model.metrics import parse_slots, sentence_exact
@@ -66,6 +73,39 @@ def summary(group: list[dict]) -> dict:
     }
 
 
+def objects_models(models: ModelRegistry) -> list[dict]:
+    """The models trained on the objects split: name, mode and fold (from their meta.json)."""
+    return [
+        {"name": name, "mode": str(meta.get("mode", "unknown")), "fold": meta.get("fold")}
+        for name, meta in models.metas().items()
+        if meta.get("split_kind") == "objects"
+    ]
+
+
+def held_out(novel: list[dict]) -> list[dict]:
+    """Per held-out object (colour x shape): its recordings, how often each colour word and each
+    shape word was said for it ("" = none), and the shares right."""
+    grid = []
+    for colour, shape in sorted({(s["colour"], s["shape"]) for s in novel}):
+        recs = [r for s in novel if (s["colour"], s["shape"]) == (colour, shape) for r in s["recordings"]]
+        said = [parse_slots(r["said"], ACTIONS, COLOURS, SHAPES) for r in recs]
+        colours = Counter(x["colour"] or "" for x in said)
+        shapes = Counter(x["object"] or "" for x in said)
+        grid.append(
+            {
+                "colour": colour,
+                "shape": shape,
+                "recordings": len(recs),
+                "colour_said": dict(colours.most_common()),
+                "shape_said": dict(shapes.most_common()),
+                "colour_right": round(colours[colour] / len(recs), 4),
+                "shape_right": round(shapes[shape] / len(recs), 4),
+                "exact": round(sum(r["exact"] for r in recs) / len(recs), 4),
+            }
+        )
+    return grid
+
+
 def generalising(corpus: Corpus, models: ModelRegistry, surveys: SurveyService, name: str | None) -> dict:
     """How one model describes every scene, scored against its own split."""
     lm = models.get(name)
@@ -74,9 +114,14 @@ def generalising(corpus: Corpus, models: ModelRegistry, surveys: SurveyService, 
     trained = [s for s in scenes.values() if s["split"] == "train"]
     _score(list(scenes.values()), trained)
     novel = [s for s in scenes.values() if s["split"] == "test"]
+    split = str(lm.meta.get("split_kind", "scenes"))
     return {
         "model": lm.name,
         "mode": lm.mode,
+        "split": split,
+        "fold": lm.meta.get("fold"),
+        "held_out": held_out(novel) if split == "objects" else [],
+        "objects_models": objects_models(models),
         "actions": list(ACTIONS),
         "objects": [f"{c} {s}" for c in COLOURS for s in SHAPES],
         "scenes": list(scenes.values()),

@@ -22,6 +22,20 @@ class CscVectors(BaseModel):
     a: list[float] = Field(description="c_a,0: initial Csc state of MTRNN_a, from the cell assemblies")
 
 
+class Familiarity(BaseModel):
+    """How far the recording lies from the model's training recordings (model/familiarity.py)."""
+
+    proprioception: float = Field(
+        ge=0.0,
+        le=1.0,
+        description="the arm's joint angles: the fraction of training recordings whose own distance to "
+        "the nearest training recording of another scene is at least this recording's distance to the "
+        "nearest training recording (1: like a training recording; about 0.5: like a new scene of the "
+        "training set; near 0: farther than all of them)",
+    )
+    vision: float = Field(ge=0.0, le=1.0, description="the camera's features, calibrated the same way")
+
+
 class Description(BaseModel):
     id: str = Field(description="recording id (corpus) or upload id")
     source: Literal["corpus", "upload"]
@@ -37,7 +51,13 @@ class Description(BaseModel):
     csc: CscVectors
     timings: Timings
     timeline: Timeline | None = Field(None, description="uploads: what the model would say at every step")
+    familiarity: Familiarity | None = Field(
+        None,
+        description="per sense, how familiar the recording is to the model (None: not known for this model)",
+    )
     warnings: list[str] = Field(
         default_factory=list,
-        description="what could not be compared: words of the expected utterance outside the lexicon, ...",
+        description="plain sentences: what could not be compared (words of the expected utterance outside "
+        "the lexicon, ...) and how the recording is unlike what the model learned from (postures, motion, "
+        "camera view, duration, joints at their limits, frames without the object)",
     )

@@ -8,7 +8,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, field_validator
 
-from server.jobs.bounds import ranges_text
+from model.experiments.splits import SPLITS
+from server.jobs.bounds import MAX_TRAIN_SCENES, ranges_text
 from server.jobs.presets import PRESETS
 from server.settings import CORES
 
@@ -20,6 +21,7 @@ LIMITS: dict[str, tuple[int, int]] = {  # field -> inclusive range, checked with
     "folds": (1, 10),
     "inits": (1, 10),
     "workers": (1, CORES),
+    "train_scenes": (1, MAX_TRAIN_SCENES),
 }
 
 
@@ -38,6 +40,18 @@ class JobRequest(BaseModel):
     folds: int = _limit("folds", "evaluate: K", 2)
     inits: int = _limit("inits", "evaluate: N", 1)
     workers: int = _limit("workers", "evaluate: local worker processes, at most one per core", 1)
+    split: Literal[SPLITS] = Field(  # type: ignore[valid-type]
+        "scenes",
+        description="the protocol split (model.experiments.splits): scenes (the paper's 50:50 by scene), "
+        "objects (held-out colour x shape pairs) or action-object (held-out action x shape pairs), each "
+        "Latin square with folds 0..3, or size (the training-size curve, with train_scenes)",
+    )
+    train_scenes: int | None = Field(
+        None,
+        description=f"size split only: how many scenes to train on (1..{MAX_TRAIN_SCENES}; the curve: 8, 16, "
+        "32, 48), tested on the same novel 16",
+        json_schema_extra={"minimum": 1, "maximum": MAX_TRAIN_SCENES},
+    )
     name: str | None = Field(
         None,
         description="train: the model's name, 1-64 characters of a-z, 0-9 and '-', not taken by another "
@@ -64,6 +78,11 @@ class JobRequest(BaseModel):
         if not low <= value <= high:
             raise ValueError(f"{info.field_name} must be in {low}..{high}, got {value}")
         return value
+
+    @field_validator("train_scenes")
+    @classmethod
+    def _scenes(cls, value: int | None, info: Any) -> int | None:
+        return None if value is None else cls._within(value, info)
 
     @field_validator("name")
     @classmethod

@@ -145,6 +145,12 @@ class Generalisation(BaseModel):
     test: dict[str, Any]
     test_object_seen: dict[str, Any]
     test_object_unseen: dict[str, Any]
+    split: str = Field(description="the model's protocol split (model.experiments.splits), from its meta")
+    fold: int | None = None
+    held_out: list[dict[str, Any]] = Field(
+        description="objects split: per held-out object the colour and shape words said for it"
+    )
+    objects_models: list[dict[str, Any]] = Field(description="the models trained on the objects split")
 
 
 class Sweeps(BaseModel):

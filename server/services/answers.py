@@ -11,7 +11,7 @@ from typing import Any
 
 from model.encoding.utterance import PHONEMES
 from model.metrics import sentence_exact
-from server.schemas.describe import CscVectors, Description, Timings
+from server.schemas.describe import CscVectors, Description, Familiarity, Timings
 from server.schemas.timeline import Timeline
 from server.services.describe import Result
 
@@ -41,5 +41,6 @@ def description_of(
         csc=CscVectors(**{k: [round(float(x), 6) for x in v] for k, v in result.csc.items()}),
         timings=Timings(**{k: round(v, 3) for k, v in result.timings.items()}),
         timeline=timeline,
+        familiarity=None if result.familiarity is None else Familiarity(**result.familiarity),
         warnings=result.warnings,
     )

@@ -2,6 +2,8 @@
 
 Upload: `data.recording.read_recording` -> `data.encode.encode_recording` (paper 4.1.1) ->
 `MultiMTRNN.describe` (3.4). A corpus scene skips the first two steps (its encodings are stored).
+Either way the served model's `Familiarity` (`model/familiarity.py`) says how far the encodings
+the model read lie from its training recordings, per sense, and adds its warnings to the answer's.
 The uploads are kept a while, so that their scene view (frames, plots, 3D) can be shown: the
 newest `upload_cache` of them, at most `UPLOAD_CACHE_BYTES` together (the newest always kept). At
 most `decode_slots` uploads are read and encoded at once; another waits up to `SLOT_WAIT_S`, then
@@ -23,6 +25,7 @@ import numpy as np
 
 from data.encode import encode_recording
 from data.recording import Recording, read_recording
+from data.world import FPS
 from model.encoding.utterance import Lexicon, encode_utterance
 from model.encoding.words import words_of
 from model.multimtrnn import Description
@@ -57,6 +60,7 @@ class Result:
     target_activity: np.ndarray | None
     timings: dict[str, float]
     warnings: list[str] = field(default_factory=list)  # e.g. words of `expected` the model cannot say
+    familiarity: dict[str, float] | None = None  # per sense in [0, 1]; None: the model has no Familiarity
 
 
 @dataclass
@@ -116,13 +120,18 @@ class DescribeService:
             f"send this one again in {RETRY_AFTER_S} s"
         )
 
-    def _describe(self, prop: np.ndarray, vis: np.ndarray, expected: str | None, timings: dict) -> Result:
+    def _describe(
+        self, prop: np.ndarray, vis: np.ndarray, found: float, expected: str | None, timings: dict
+    ) -> Result:
+        """The served model's description; `found`: the fraction of frames with the object."""
         t0 = time.perf_counter()
         with self.models.lock:
             served = self.models.served
             d = served.model.describe(prop, vis, served.lexicon)
         timings["model_ms"] = (time.perf_counter() - t0) * 1e3
         target, warnings = self._expected(expected, served.lexicon)
+        assessed = None if served.familiarity is None else served.familiarity.assess(prop, vis, found, FPS)
+        warnings += [] if assessed is None else assessed.warnings
         return Result(
             text=d.text,
             words=list(d.words),
@@ -133,6 +142,7 @@ class DescribeService:
             target_activity=target,
             timings=timings,
             warnings=warnings,
+            familiarity=None if assessed is None else assessed.familiarity,
         )
 
     def _target(self, text: str) -> np.ndarray:
@@ -166,7 +176,7 @@ class DescribeService:
     def describe_scene(self, rid: str) -> Result:
         entry = self.corpus.entry(rid)
         t0 = time.perf_counter()
-        result = self._describe(entry.proprioception, entry.vision, entry.utterance, {})
+        result = self._describe(entry.proprioception, entry.vision, entry.object_found, entry.utterance, {})
         result.timings["total_ms"] = (time.perf_counter() - t0) * 1e3
         return result
 
@@ -198,7 +208,8 @@ class DescribeService:
         t2 = time.perf_counter()
         timings = {"read_ms": (t1 - t_slot) * 1e3, "encode_ms": (t2 - t1) * 1e3}
         prop, vis = features.proprioception, features.vision
-        result = self._describe(prop, vis, rec.utterance or None, timings)
+        found = float(np.mean(features.object_found))
+        result = self._describe(prop, vis, found, rec.utterance or None, timings)
         timings["total_ms"] = (time.perf_counter() - t0) * 1e3
         uid = "upload-" + hashlib.sha1(data).hexdigest()[:12]
         upload = Upload(uid, filename, self.models.served.name, rec, prop, vis, result)

@@ -6,6 +6,11 @@ the folders under `settings.models_dir` (the shipped models) and then under the 
 loads a model the first time it is asked for, knows which one is served, and reads each model's
 training and test recordings from its meta with one rule (`split_ids`). Finished training jobs
 add their folder (`register`).
+
+Each loaded model carries its `model.familiarity.Familiarity` (how far a recording lies from its
+training recordings): the one saved in its checkpoint, else (models trained before familiarity
+existed, such as the shipped ones) fitted once on load from the corpus recordings its meta["ids"]
+name, when the registry was given the corpus (`recordings`); None when neither is at hand.
 """
 
 from __future__ import annotations
@@ -13,18 +18,23 @@ from __future__ import annotations
 import json
 import logging
 import threading
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from model import checkpoint
+from model.data import scene_key
 from model.encoding.utterance import Lexicon
+from model.familiarity import Familiarity, vision_columns
 from model.multimtrnn import MultiMTRNN
 from server.services.corpus import Corpus
 from server.services.errors import NotFound, Unavailable
 from server.settings import Settings
 
 logger = logging.getLogger(__name__)
+
+Recordings = Callable[[], Mapping[str, Any]]  # the corpus entries by id (proprioception, vision, ...)
 
 
 def split_ids(meta: dict, corpus_ids: Iterable[str]) -> tuple[frozenset[str], frozenset[str]]:
@@ -48,6 +58,7 @@ class LoadedModel:
     meta: dict
     train_ids: frozenset[str]  # recording ids or scene ids the model was trained on
     test_ids: frozenset[str]
+    familiarity: Familiarity | None = None  # how far a recording lies from the training recordings
 
     @property
     def mode(self) -> str:
@@ -84,6 +95,7 @@ class ModelRegistry:
         preferred: str,
         corpus_lexicon: Lexicon | None,
         user_models_dir: Path | None = None,
+        recordings: Recordings | None = None,
     ) -> None:
         self.dirs = discover(models_dir)  # shipped first, then the app's own
         for name, path in discover(user_models_dir).items() if user_models_dir else ():
@@ -97,7 +109,7 @@ class ModelRegistry:
                 "train one with `make model`"
             )
         self.lock = threading.RLock()
-        self._corpus_ids, self._corpus_lexicon = corpus_ids, corpus_lexicon
+        self._corpus_ids, self._corpus_lexicon, self._recordings = corpus_ids, corpus_lexicon, recordings
         self._loaded: dict[str, LoadedModel] = {}
         self._served = self._load(preferred if preferred in self.dirs else next(iter(self.dirs)))
 
@@ -105,7 +117,12 @@ class ModelRegistry:
     def serving(cls, settings: Settings, corpus: Corpus) -> ModelRegistry:
         """The registry of the shipped and the app's models over `corpus`, serving `settings.model` first."""
         return cls(
-            settings.models_dir, list(corpus.entries), settings.model, corpus.lexicon, user_models(settings)
+            settings.models_dir,
+            list(corpus.entries),
+            settings.model,
+            corpus.lexicon,
+            user_models(settings),
+            lambda: corpus.entries,
         )
 
     def _load(self, name: str) -> LoadedModel:
@@ -117,8 +134,37 @@ class ModelRegistry:
                 if lexicon is None:
                     raise Unavailable(f"model {name!r} has no lexicon and the corpus is empty")
                 train, test = split_ids(meta, self._corpus_ids)
-                self._loaded[name] = LoadedModel(name, self.dirs[name], model, lexicon, meta, train, test)
+                familiarity = checkpoint.load_familiarity(self.dirs[name]) or self._fit_familiarity(
+                    name, meta
+                )
+                self._loaded[name] = LoadedModel(
+                    name, self.dirs[name], model, lexicon, meta, train, test, familiarity
+                )
             return self._loaded[name]
+
+    def _fit_familiarity(self, name: str, meta: dict) -> Familiarity | None:
+        """Familiarity fitted on the corpus recordings meta["ids"] names (recording or scene ids)."""
+        ids = set(meta.get("ids") or [])
+        entries = self._recordings() if self._recordings is not None else {}
+        picked = [e for rid, e in entries.items() if rid in ids or scene_key(rid) in ids]
+        if len(picked) < 2:
+            logger.info(
+                "model %s: no familiarity (its checkpoint has none, its recordings are not at hand)", name
+            )
+            return None
+        familiarity = Familiarity.fit(
+            [e.proprioception for e in picked],
+            [e.vision for e in picked],
+            [e.object_found for e in picked],
+            [e.id for e in picked],
+            vision_columns(meta),
+        )
+        logger.info(
+            "model %s: its checkpoint has no familiarity; fitted on the %d corpus recordings it learned from",
+            name,
+            len(picked),
+        )
+        return familiarity
 
     @property
     def served(self) -> LoadedModel:

@@ -59,3 +59,14 @@ def test_loading_rebuilds_the_same_weights(trained, tmp_path):
     model, _ = checkpoint.load(checkpoint.save(trained.model, tmp_path / "ck", trained.meta))
     for name, value in trained.model.state_dict().items():
         assert torch.equal(model.state_dict()[name], value), name
+
+
+def test_familiarity_is_fitted_by_train_and_saved_beside_the_model(trained, tmp_path):
+    data = tiny_corpus(variants=1)
+    assert trained.familiarity is not None
+    out = checkpoint.save(trained.model, tmp_path / "ck", trained.meta, trained.csc, trained.familiarity)
+    assert (out / "familiarity.safetensors").is_file()
+    again = checkpoint.load_familiarity(out)
+    for p, v in zip(data.proprioception, data.vision, strict=True):
+        assert again.score(p, v) == trained.familiarity.score(p, v) == {"proprioception": 1.0, "vision": 1.0}
+    assert checkpoint.load_familiarity(checkpoint.save(trained.model, tmp_path / "old", trained.meta)) is None

@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import logging
+from pathlib import Path
+
 import numpy as np
 import pytest
 from explorer_artefacts import Exported, zip_bytes
 from fastapi.testclient import TestClient
+from hostile_cases import recording_members, zip_of
 
 from data.corpus import load_corpus
-from model.checkpoint import load
+from model.checkpoint import load, save
 from model.encoding.utterance import PHONEMES, Lexicon, encode_utterance
+from server.services.corpus import Corpus
+from server.services.models import ModelRegistry
 from server.settings import Settings
 
 
@@ -93,3 +101,63 @@ def test_upload_over_the_size_cap_is_413(client: TestClient, monkeypatch: pytest
 
 def test_unknown_upload_is_404(client: TestClient) -> None:
     assert client.get("/api/uploads/upload-000000000000").status_code == 404
+
+
+def test_a_corpus_recording_is_familiar_to_the_model_that_learned_from_it(
+    client: TestClient, settings: Settings
+) -> None:
+    """The untrained test models' checkpoints have no familiarity: the registry fits it from the
+    corpus recordings their meta["ids"] name, so their training recordings score 1."""
+    meta = json.loads((settings.models_dir / "default" / "meta.json").read_text())
+    trained_on, rest = (
+        meta["ids"][0],
+        next(e for e in load_corpus(settings.corpus_path).entries if e.id not in meta["ids"]),
+    )
+    body = client.post(f"/api/scenes/{trained_on}/describe").json()
+    assert body["familiarity"] == {"proprioception": 1.0, "vision": 1.0} and body["warnings"] == []
+    held_out = client.post(f"/api/scenes/{rest.id}/describe").json()["familiarity"]
+    assert all(0 < held_out[k] <= 1 for k in ("proprioception", "vision"))
+
+
+def test_a_far_off_upload_is_unfamiliar_and_says_why(client: TestClient) -> None:
+    """20 s of a motionless arm at the middle of its joint ranges, a red block on grey."""
+    data = zip_of(recording_members(steps=400))
+    body = client.post("/api/describe", files={"recording": ("still.zip", data)}).json()
+    assert body["familiarity"]["proprioception"] < 0.05
+    assert "the arm's postures are far outside what the model learned from" in body["warnings"]
+    assert any(
+        w.startswith("the recording is much longer than any the model learned from (20.0 s")
+        for w in body["warnings"]
+    )
+    again = client.get(f"/api/uploads/{body['id']}/description").json()
+    assert again["familiarity"] == body["familiarity"] and again["warnings"] == body["warnings"]
+
+
+def test_familiarity_is_documented_in_openapi(client: TestClient) -> None:
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    fields = schemas["Familiarity"]["properties"]
+    assert fields["proprioception"]["maximum"] == 1 and fields["vision"]["minimum"] == 0
+    assert "nearest training recording" in fields["proprioception"]["description"]
+    assert (
+        "unlike what the model learned from"
+        in schemas["Description"]["properties"]["warnings"]["description"]
+    )
+
+
+def test_the_registry_fits_familiarity_once_for_an_old_checkpoint_and_says_so(
+    settings: Settings, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    corpus = Corpus.load(settings)
+    with caplog.at_level(logging.INFO, logger="server.services.models"):
+        registry = ModelRegistry.serving(dataclasses.replace(settings, user_dir=tmp_path), corpus)
+    assert "its checkpoint has no familiarity; fitted on the" in caplog.text
+    fitted = registry.served.familiarity
+    assert fitted is not None and registry.get("default").familiarity is fitted
+    model, meta = load(settings.models_dir / "default")
+    save(model, tmp_path / "models" / "saved", meta, familiarity=fitted)
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="server.services.models"):
+        saved = ModelRegistry(tmp_path / "models", list(corpus.entries), "saved", corpus.lexicon).served
+    assert saved.familiarity is not None and "fitted on the" not in caplog.text
+    e = corpus.entries[meta["ids"][0]]
+    assert saved.familiarity.score(e.proprioception, e.vision) == fitted.score(e.proprioception, e.vision)

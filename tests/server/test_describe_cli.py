@@ -1,5 +1,6 @@
 """`mtrnn describe RECORDING [--json]` gives the API's answer on stdout, loads the model and its
-lexicon but not the corpus, and reports bad files on stderr."""
+lexicon (and the corpus only for what the checkpoint lacks: its words, its familiarity), and
+reports bad files on stderr."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from pathlib import Path
 import pytest
 from explorer_artefacts import Exported
 from fastapi.testclient import TestClient
+from hostile_cases import recording_members, zip_of
 
 from server.cli import main
 from server.settings import Settings
@@ -40,7 +42,9 @@ def test_describe_prints_the_utterance_and_reports_bad_files(
 ) -> None:
     assert main(["describe", str(exported.npz)]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert len(out) == 4 and out[1].startswith("expected:") and out[2].startswith("phonemes:")
+    assert out[1].startswith("expected:") and out[2].startswith("phonemes:") and out[-1].startswith("model:")
+    assert out[3].startswith("familiarity: proprioception ") and " %, vision " in out[3]
+    assert all(line.startswith("warning: ") for line in out[4:-1])
     bad = tmp_path / "bad.zip"
     bad.write_bytes(b"nope")
     assert main(["describe", str(bad)]) == 2
@@ -114,3 +118,32 @@ def test_describe_loads_neither_the_web_app_nor_the_whole_dictionary(env: None, 
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert lines[1].startswith("expected:") and lines[-1] == "[]"
+
+
+def test_describe_says_how_familiar_the_recording_is(
+    env: None, client: TestClient, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same familiarity and warnings as the API; a far-off recording gets its warnings printed."""
+    still = tmp_path / "still.zip"
+    still.write_bytes(zip_of(recording_members(steps=400)))
+    assert main(["describe", str(still), "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    api = client.post("/api/describe", files={"recording": (still.name, still.read_bytes())}).json()
+    assert cli["familiarity"] == api["familiarity"] and cli["warnings"] == api["warnings"]
+    assert main(["describe", str(still)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    prop, vis = (round(100 * api["familiarity"][k]) for k in ("proprioception", "vision"))
+    assert f"familiarity: proprioception {prop} %, vision {vis} %" in out
+    assert [line.removeprefix("warning: ") for line in out if line.startswith("warning: ")] == api["warnings"]
+
+
+def test_without_a_corpus_an_old_checkpoint_answers_without_familiarity(
+    env: None,
+    exported: Exported,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setenv("MTRNN_CORPUS", str(tmp_path / "no-corpus.npz"))
+    assert main(["describe", str(exported.zip), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["familiarity"] is None

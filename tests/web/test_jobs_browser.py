@@ -121,3 +121,29 @@ def test_the_results_page_draws_the_report_figures(jobs_page) -> None:  # noqa: 
     page.select_option("#pca-colour", "colour")
     page.wait_for_selector("[id^=pca-faithful] .scatterlayer .trace")
     assert not page.errors
+
+
+def test_the_split_is_chosen_by_keyboard_and_the_size_split_asks_for_its_scenes(
+    jobs_page, base_url: str
+) -> None:  # noqa: ANN001
+    page = jobs_page
+    page.goto("/#/jobs")
+    page.wait_for_selector("#job-split")
+    assert page.locator("label:has(#job-split)").inner_text().startswith("split")
+    assert page.locator("#job-train-scenes").is_hidden()
+    page.focus("#job-split")
+    for _ in range(3):  # scenes -> objects -> action-object -> size
+        page.keyboard.press("ArrowDown")
+    assert page.input_value("#job-split") == "size"
+    assert page.locator("#job-train-scenes").is_visible()
+    page.fill("#job-train-scenes", "2")
+    page.select_option("select[name=mode]", "faithful")
+    page.click("#start-job")
+    row = page.wait_for_selector("tr[data-job] >> text=faithful, size split (2 scenes)")
+    job_id = row.evaluate("el => el.closest('tr').dataset.job")
+    job = httpx.get(f"{base_url}/api/jobs/{job_id}", timeout=30).json()
+    httpx.post(f"{base_url}/api/jobs/{job_id}/cancel", timeout=30)
+    assert job["params"]["split"] == "size" and job["params"]["train_scenes"] == 2
+    page.select_option("#job-split", "objects")
+    assert page.get_attribute("input[name=fold]", "max") == "3"
+    assert not page.errors

@@ -1,16 +1,105 @@
 // Lesson 7: generalising. Training vs novel scenes: which combinations fail and why, two served
-// models (e.g. faithful vs end-to-end) side by side, computed from the models on request.
+// models (e.g. faithful vs end-to-end) side by side, computed from the models on request. Then the
+// objects split: for a fold, the objects (colour x shape) a model never saw and the colour and shape
+// words it said for them, from a model trained on that split (one the app has, or one trained here
+// with the Jobs machinery: POST /api/jobs, its progress polled).
 
-import { get } from "../js/api.js";
+import { get, post } from "../js/api.js";
 import { h, errorBox } from "../js/dom.js";
-import { EXACT_SCALE, SPLIT_COLOURS } from "../js/palette.js";
+import { EXACT_SCALE, OBJECT_COLOURS, SHAPES, SPLIT_COLOURS } from "../js/palette.js";
 import { plotly, chart } from "../js/plots.js";
 import { control, controls, tryThis, select, num } from "./common.js";
 
 export const intro = [
   "The model is trained on half of the 64 scenes (all four recordings of a scene on the same side) and asked to describe the other half: actions, colours and shapes it knows, in combinations it has never met. The paper reports an F1 of 0.98 on training and 0.64 on novel scenes for its best network, with mostly single-phoneme errors.",
   "Each grid shows, for every action (rows) and object (columns), the share of the scene's recordings the model describes exactly; boxed cells (T) are training scenes. Click a cell to read what was said. The tables split novel scenes by whether their object (colour + shape) was ever seen in training: a new pairing of known parts is what the cell assemblies must compose.",
+  "The last panel asks for exactly that composition: on the objects split a fold holds out four colour × shape objects (a Latin square, so every colour and every shape is still seen with three other partners) and tests every action on them. Which colour word and which shape word does the model say for an object it never saw?",
 ];
+
+const OBJECT_FOLDS = [0, 1, 2, 3];  // the objects split's folds (model/experiments/splits.py)
+const POLL_MS = 2000;
+const ENDED = ["done", "failed", "cancelled", "interrupted"];
+
+function counts(said) {
+  return Object.entries(said).map(([w, n]) => `${w || "(none)"} ×${n}`).join(", ");
+}
+
+// The held-out objects of one objects-split model: a colour × shape grid and a table of the words said.
+function drawObjects(r, grid, table) {
+  const at = Object.fromEntries(r.held_out.map((g) => [`${g.colour} ${g.shape}`, g]));
+  const top = (said) => Object.keys(said)[0] || "(none)";
+  const z = OBJECT_COLOURS.map((c) => SHAPES.map((s) => at[`${c} ${s}`]?.exact ?? null));
+  const text = OBJECT_COLOURS.map((c) => SHAPES.map((s) => {
+    const g = at[`${c} ${s}`];
+    return g ? `said: ${top(g.colour_said)} ${top(g.shape_said)}` : "seen in training";
+  }));
+  chart(grid, [{ z, x: SHAPES, y: OBJECT_COLOURS, text, texttemplate: "%{text}", type: "heatmap", zmin: 0, zmax: 1,
+    colorscale: EXACT_SCALE, colorbar: { title: "exact" }, hovertemplate: "the %{y} %{x}: %{text}, %{z:.0%} exact<extra></extra>" }],
+  { title: { text: `${r.model} (fold ${r.fold}): what it said for the objects it never saw`, font: { size: 13 } },
+    xaxis: { title: "shape" }, yaxis: { title: "colour", autorange: "reversed" }, margin: { l: 75, r: 10, t: 40, b: 60 } });
+  table.replaceChildren(h("table", { class: "lesson-table", id: "objects-words" },
+    h("thead", {}, h("tr", {}, ["held-out object", "recordings", "colour words said", "shape words said", "colour right", "shape right"].map((x) => h("th", {}, x)))),
+    h("tbody", {}, r.held_out.map((g) => h("tr", {}, h("td", {}, `${g.colour} ${g.shape}`), h("td", { class: "num" }, g.recordings),
+      h("td", {}, counts(g.colour_said)), h("td", {}, counts(g.shape_said)),
+      h("td", { class: "num" }, `${num(100 * g.colour_right, 0)} %`), h("td", { class: "num" }, `${num(100 * g.shape_right, 0)} %`))))));
+}
+
+// The objects-split panel: a fold, the model trained on it (or a button that trains one), its grid.
+function objectsPanel(ctx, listed) {
+  let models = listed;
+  let timer = null;
+  const fold = select("objects-fold", OBJECT_FOLDS.map((k) => [k, `fold ${k}`]), OBJECT_FOLDS.includes(Number(ctx.params.ofold)) ? ctx.params.ofold : 0);
+  const status = h("p", { id: "objects-status", class: "muted" });
+  const bar = h("progress", { id: "objects-progress", max: 1, value: 0, hidden: true, "aria-label": "training progress" });
+  const train = h("button", { type: "button", id: "objects-train", hidden: true }, "Train one (end_to_end, quick budget)");
+  const grid = h("div", { class: "plot", id: "objects-grid", style: "height:330px" });
+  const table = h("div", { id: "objects-table" });
+
+  async function show() {
+    const k = Number(fold.value);
+    ctx.setParams({ ofold: k });
+    const model = models.find((m) => m.fold === k);
+    train.hidden = Boolean(model);
+    grid.replaceChildren(); table.replaceChildren();
+    if (!model) {
+      status.textContent = `No model of the app was trained on fold ${k} of the objects split, so there is nothing to show yet: train one here: a training job like those of the Jobs page, on a quick budget (a tenth of every stage's epochs).`;
+      return;
+    }
+    status.textContent = `${model.name} (${model.mode}), trained without the four objects below; describing them…`;
+    try {
+      const r = await get("/api/lessons/generalising", { model: model.name });
+      status.textContent = `${model.name} (${model.mode}), trained on fold ${k} of the objects split: its four held-out objects, each in every action.`;
+      drawObjects(r, grid, table);
+    } catch (e) { status.replaceChildren(errorBox(e.message)); }
+  }
+
+  async function follow(id) {
+    const job = await get(`/api/jobs/${id}`);
+    const p = job.progress;
+    bar.value = p?.epochs ? p.epoch / p.epochs : 0;
+    status.textContent = `Training job ${id}: ${job.status}${p?.stage ? `, ${p.stage} epoch ${p.epoch}/${p.epochs}` : ""}${job.position ? `, queue position ${job.position}` : ""}`;
+    if (!ENDED.includes(job.status)) { timer = setTimeout(() => follow(id).catch((e) => status.replaceChildren(errorBox(e.message))), POLL_MS); return; }
+    bar.hidden = true; train.disabled = false;
+    if (job.status !== "done") { status.replaceChildren(errorBox(`The training job ended: ${job.status}${job.error ? `: ${job.error}` : ""}`)); return; }
+    models = (await get("/api/lessons/generalising", { model: job.result.model })).objects_models;
+    await ctx.modelsChanged?.();
+    await show();
+  }
+
+  train.addEventListener("click", async () => {
+    train.disabled = true;
+    try {
+      const job = await post("/api/jobs", { kind: "train", mode: "end_to_end", split: "objects", fold: Number(fold.value), preset: "quick" });
+      bar.hidden = false;
+      await follow(job.id);
+    } catch (e) { train.disabled = false; status.replaceChildren(errorBox(e.message)); }
+  });
+  fold.addEventListener("change", show);
+  const element = h("section", { class: "panel", id: "objects-panel" }, h("h2", {}, "Objects never seen (the objects split)"),
+    controls(control(ctx, "ofold", "fold", fold, "Which Latin square of held-out objects: each fold holds out one colour with each shape.", "split")),
+    status, bar, train, grid, table);
+  return { element, show, stop: () => clearTimeout(timer) };
+}
 
 export async function render(root, ctx, index) {
   await plotly();
@@ -104,5 +193,8 @@ export async function render(root, ctx, index) {
 
   pickers.forEach((p, k) => p.addEventListener("change", () => load(k)));
   await Promise.all([load(0), load(1)]);
-  return null;
+  const objects = objectsPanel(ctx, results.find(Boolean)?.objects_models || []);
+  root.append(objects.element);
+  await objects.show();
+  return objects.stop;
 }

@@ -6,7 +6,9 @@
 // stage is shaping (c_0 of MTRNN_a, c_T of the encoders), redrawn at each progress event so the
 // points can be seen self-organising. The server runs a few jobs at once and queues the others
 // (their position is shown). The epoch presets come from the server with the minutes each took per
-// mode (GET /api/jobs/presets). Jobs are kept by the server across restarts.
+// mode (GET /api/jobs/presets). Jobs are kept by the server across restarts. A job runs on one
+// protocol split (model/experiments/splits.py): the paper's 50:50 by scene, held-out objects or
+// action x shape pairs (Latin squares, folds 0..3), or a training size (how many scenes it trains on).
 
 import { get, post, put, subscribe } from "../js/api.js";
 import { h } from "../js/dom.js";
@@ -17,6 +19,13 @@ export const meta = { route: "jobs", title: "Jobs", order: 80,
   description: "train or evaluate models, watch them learn, serve a new model" };
 
 const EVENTS = ["snapshot", "progress", "run", "done", "error", "cancelled"];
+const SPLITS = [  // value, label; the server checks each (server/jobs/bounds.py: check_split)
+  ["scenes", "scenes: the paper's 50:50 by scene"],
+  ["objects", "objects: colour × shape pairs never seen (4 folds)"],
+  ["action-object", "action-object: action × shape pairs never seen (4 folds)"],
+  ["size", "size: train on fewer scenes, test on 16 novel ones"],
+];
+const SQUARE_FOLDS = 4;  // folds of a Latin-square split
 const PROGRESS_EVERY = 5;  // epochs between two live updates
 
 function duration(seconds) {
@@ -61,6 +70,8 @@ function jobForm(presets, submit) {
   const seed = h("input", { name: "seed", type: "number", min: 0, max: 1000000, value: 0, size: 3 });
   const folds = h("input", { name: "folds", type: "number", min: 1, max: 10, value: 2, size: 3 });
   const inits = h("input", { name: "inits", type: "number", min: 1, max: 10, value: 1, size: 3 });
+  const split = h("select", { name: "split", id: "job-split" }, SPLITS.map(([v, label]) => h("option", { value: v }, label)));
+  const trainScenes = h("input", { name: "train_scenes", id: "job-train-scenes", type: "number", min: 1, max: 48, value: 16, size: 3 });
   const preset = h("select", { name: "preset", "aria-label": "epoch budget" },
     Object.keys(presets).map((k) => h("option", { value: k })));
   const name = h("input", { name: "name", placeholder: "model name (optional)", pattern: "[a-z0-9\\-]{1,64}",
@@ -68,29 +79,43 @@ function jobForm(presets, submit) {
   const field = (label, control) => h("label", { class: "field" }, `${label} `, control);
   const trainOnly = [field("fold", fold), field("name", name)];
   const evalOnly = [field("folds", folds), field("inits", inits)];
+  const sizeOnly = field("training scenes", trainScenes);
   function sync() {
     trainOnly.forEach((el) => { el.hidden = kind.value !== "train"; });
     evalOnly.forEach((el) => { el.hidden = kind.value !== "evaluate"; });
+    sizeOnly.hidden = split.value !== "size";
+    const square = split.value === "objects" || split.value === "action-object";
+    fold.max = square ? SQUARE_FOLDS - 1 : 999;
+    folds.max = square ? SQUARE_FOLDS : 10;
     [...mode.options].forEach((o) => { o.disabled = kind.value === "train" && o.value === "peer"; });
     if (mode.selectedOptions[0].disabled) mode.value = "end_to_end";
     [...preset.options].forEach((o) => { o.textContent = presets[o.value].labels[mode.value]; });
   }
   kind.addEventListener("change", sync);
   mode.addEventListener("change", sync);
+  split.addEventListener("change", sync);
   const form = h("form", { class: "controls", id: "job-form" }, field("job", kind), field("mode", mode),
-    ...trainOnly, ...evalOnly, field("seed", seed), field("epochs", preset),
+    field("split", split), sizeOnly, ...trainOnly, ...evalOnly, field("seed", seed), field("epochs", preset),
     h("button", { type: "submit", id: "start-job" }, "Start"));
   sync();
   form.addEventListener("submit", (ev) => {
     ev.preventDefault();
     const every = mode.value === "peer" ? "progress_every" : "training.progress_every";
     const body = { kind: kind.value, mode: mode.value, seed: Number(seed.value), preset: preset.value,
-      overrides: { [every]: PROGRESS_EVERY } };
+      split: split.value, overrides: { [every]: PROGRESS_EVERY } };
+    if (split.value === "size") body.train_scenes = Number(trainScenes.value);
     if (kind.value === "train") { body.fold = Number(fold.value); if (name.value) body.name = name.value; }
     else { body.folds = Number(folds.value); body.inits = Number(inits.value); }
     submit(body);
   });
   return form;
+}
+
+// "end_to_end" (the paper's split), "end_to_end, objects split", "peer, size split (16 scenes)".
+function splitText(params) {
+  const split = params.split || "scenes";
+  if (split === "scenes") return params.mode;
+  return `${params.mode}, ${split} split${params.train_scenes ? ` (${params.train_scenes} scenes)` : ""}`;
 }
 
 // One row of the jobs table: its status (or place in the queue), a progress bar while it runs, actions.
@@ -103,7 +128,7 @@ function jobRow(job, { watch, cancel, serve }) {
   const shown = job.status === "queued" ? progressText(job) : job.status;
   const progress = job.status === "running" ? [progressBar(job.progress), " ", progressText(job)] : [];
   return h("tr", { dataset: { job: job.id, status: job.status } },
-    h("td", {}, job.id), h("td", {}, job.kind), h("td", {}, job.params.mode),
+    h("td", {}, job.id), h("td", {}, job.kind), h("td", {}, splitText(job.params)),
     h("td", { class: "job-status" }, shown), h("td", { class: "job-progress" }, progress), h("td", {}, actions));
 }
 
@@ -220,7 +245,7 @@ export async function render(root, ctx) {
   const message = h("p", { class: "muted", id: "job-message" });
   const tbody = h("tbody", { id: "job-rows" });
   const table = h("table", { class: "scenes", id: "jobs" }, h("thead", {}, h("tr", {},
-    ["job", "kind", "mode", "status", "progress", ""].map((t) => h("th", {}, t)))), tbody);
+    ["job", "kind", "mode and split", "status", "progress", ""].map((t) => h("th", {}, t)))), tbody);
   let source = null;
   let watched = null;
 

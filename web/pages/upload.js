@@ -36,6 +36,28 @@ function exampleItem(ex, onTry) {
       h("a", { href: ex.url, download: `${ex.name}.zip`, class: "download" }, `download ${ex.name}.zip`)));
 }
 
+const FAMILIARITY_HELP = "How far this recording lies from the recordings the model learned from, per sense: the share of the model's own training recordings that lie at least as far from their nearest neighbour (of another scene). 100 % is like a training recording, about 50 % like a new scene of the corpus, near 0 % farther than all of them: the description is then a guess.";
+const SENSES = [["proprioception", "arm (proprioception)"], ["vision", "camera (vision)"]];
+
+// How familiar the recording is to the model (its meters carry the number as text too), and the
+// warnings of the answer (unlike what the model learned from, words it cannot say).
+function familiaritySection(d) {
+  const meters = d.familiarity === null ? [h("p", { class: "muted small" }, "The served model has no familiarity: its training recordings are not at hand.")]
+    : SENSES.map(([key, label]) => {
+      const value = d.familiarity[key];
+      const id = `familiarity-${key}`;
+      return h("div", { class: "familiarity-row" },
+        h("label", { for: id }, `${label} `),
+        h("meter", { id, min: 0, max: 1, low: 0.05, high: 0.5, optimum: 1, value }),
+        h("span", { class: "familiarity-value", dataset: { sense: key } }, ` ${Math.round(100 * value)} %`));
+    });
+  const warnings = d.warnings.length
+    ? h("ul", { id: "upload-warnings", class: "warnings", "aria-label": "warnings" }, d.warnings.map((w) => h("li", {}, `⚠ ${w}`)))
+    : null;
+  return h("div", { class: "familiarity", id: "upload-familiarity" },
+    h("h3", {}, "How familiar this recording is to the model ", help(FAMILIARITY_HELP, null)), ...meters, warnings);
+}
+
 function preview(name, d, detail) {
   const thumbs = [0, Math.floor(detail.frames / 2), detail.frames - 1].map((i) =>
     h("img", { src: `/api/scenes/${d.id}/frames/${i}.jpg?width=160`, alt: `camera frame ${i} of ${name}` }));
@@ -46,6 +68,7 @@ function preview(name, d, detail) {
     h("p", { class: "said" }, h("span", { class: "label" }, "model says "), h("q", { id: "upload-utterance" }, d.utterance || "(silence)"),
       d.correct === null ? null : h("span", { class: d.correct ? "ok" : "bad" }, d.correct ? " ✓ right" : " ✗ wrong")),
     d.expected ? h("p", { class: "said" }, h("span", { class: "label" }, "teacher said "), h("q", { id: "upload-expected" }, d.expected)) : null,
+    familiaritySection(d),
     h("p", { class: "muted small" }, `read ${fmt(d.timings.read_ms, 0)} ms · encode ${fmt(d.timings.encode_ms, 0)} ms · model ${fmt(d.timings.model_ms, 0)} ms`),
     h("a", { class: "button", href: `#/scene/${d.id}`, id: "open-upload" }, "Open in the scene view"));
 }

@@ -1,14 +1,15 @@
 """`docs/RESULTS.md` and its figures, regenerated from the run store (`mtrnn report`).
 
 Everything in the report is computed from the runs in the store: tables of faithful vs
-end_to_end vs peer on train / test / mixed with the paper's numbers beside ours (4.3), the psi_s
+end_to_end vs peer on train / test / mixed with the paper's numbers beside ours (4.3), the same
+modes on the harder splits (held-out objects, action x shape pairs, the training-size curve), the psi_s
 sweep (Fig. 9 a-d), the cosine experiment (Fig. 3), and Fig. 10-style PCA panels of the Csc
 spaces of a low- and a high-generalisation run (these need the encoded scenes, `data`, to
 describe every recording with the stored checkpoints). The figures' numbers are also written to
 `figures/results.json` for the app's interactive results page.
 
-`sections` writes each part, `tables` the Markdown tables, `prose` the sentences, `figures` the
-PNGs, `panels` the PCA panels.
+`sections` writes each part (`other_splits` those of the harder splits), `tables` the Markdown
+tables, `prose` the sentences, `figures` the PNGs, `panels` the PCA panels.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from model.experiments.report import sections
+from model.experiments.report import other_splits, sections
 from model.experiments.report.sections import Page, Report
 from model.experiments.report.tables import PAPER
 from model.experiments.runstore import RunStore
@@ -57,6 +58,8 @@ def build_report(
         page.md += ["Commands:", "", "```", *commands, "```", ""]
     page.md += [f"- {n}" for n in notes] + ([""] if notes else [])
     evaluate = sections.modes(page, store)
+    other_splits.squares(page, store)
+    other_splits.size_curve(page, store)
     sections.psi_s(page, store, data)
     sections.cosine(page, store)
     if data is not None and evaluate:

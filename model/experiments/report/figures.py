@@ -168,3 +168,24 @@ def figure_pca(rows: list[tuple[str, list[dict]]], path: Path, colour_by: str = 
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def figure_size_curve(curve: dict[str, list[dict]], path: Path) -> None:
+    """Test sentence exact against the number of training scenes, one line per mode."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    for mode, points in curve.items():
+        x = [p["train_scenes"] for p in points]
+        y = np.array([np.nan if p["mean"] is None else p["mean"] for p in points], dtype=float)
+        e = np.array([p["sem"] or 0.0 for p in points], dtype=float)
+        ax.errorbar(x, y, yerr=e, marker="o", capsize=3, label=mode, color=MODE_COLOURS.get(mode))
+    ax.set_xticks(sorted({p["train_scenes"] for points in curve.values() for p in points}))
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel("scenes trained on (of 64)")
+    ax.set_ylabel("sentence exact on the novel scenes (mean +- s.e.)")
+    ax.set_title("Training-size curve: exact on 16 novel scenes")
+    ax.grid(alpha=0.3)
+    ax.legend(title="mode", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

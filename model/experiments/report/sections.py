@@ -66,8 +66,9 @@ class Page:
 
 
 def modes(page: Page, store: RunStore) -> dict[str, list[RunRecord]]:
-    """Every mode's evaluation runs (of its most evaluated config) and, if any, their section."""
-    evaluate = {m: one_config(store.runs(experiment="evaluate", mode=m)) for m in MODES}
+    """Every mode's evaluation runs on the paper's split (of its most evaluated config) and, if any,
+    their section."""
+    evaluate = {m: one_config(store.runs(experiment="evaluate", mode=m, split="scenes")) for m in MODES}
     evaluate = {m: r for m, r in evaluate.items() if r}
     summaries = {m: summarise(r) for m, r in evaluate.items()}
     page.report.data["modes"] = {
@@ -138,7 +139,7 @@ def _beside_the_paper(page: Page, evaluate: dict[str, list[RunRecord]], summarie
 
 def psi_s(page: Page, store: RunStore, data: Any | None) -> None:
     """Fig. 9 (a-d) from the psi_s sweep, and (e-g) when the corpus is given."""
-    psi_runs = store.runs(experiment="psi_s")
+    psi_runs = store.runs(experiment="psi_s", split="scenes")
     if not psi_runs:
         return
     table = psi_s_table(psi_runs)

@@ -8,7 +8,13 @@ import math
 import pytest
 import torch
 
-from model.experiments.cosine import CosineSetup, cosine_sequences, run_cosine, train_cosine_once
+from model.experiments.cosine import (
+    CosineSetup,
+    cosine_sequences,
+    run_cosine,
+    train_cosine_once,
+    train_cosine_runs,
+)
 
 FAST = CosineSetup(cf=4, threshold=1e-3, max_epochs=25, snapshot_every=5)
 
@@ -39,5 +45,14 @@ def test_summary_has_mean_and_standard_error_and_is_json():
     for key in ("d_avg", "d_rel", "epochs"):
         assert set(result[key]) == {"mean", "se"}
     assert result["d_rel"]["mean"] == pytest.approx(sum(r["d_rel"] for r in result["per_run"]) / 2)
-    assert len(result["snapshots"]) == 2 and len(result["snapshots"][0][0]["csc"]) == 4
     json.dumps(result)
+
+
+def test_runs_learning_together_are_the_runs_learning_alone():
+    alone = [train_cosine_once(2e-3, seed, FAST) for seed in (3, 4)]
+    together = train_cosine_runs(2e-3, [3, 4], FAST)
+    for a, t in zip(alone, together, strict=True):
+        assert a.epochs == t.epochs and a.converged == t.converged
+        assert a.d_rel == pytest.approx(t.d_rel, abs=1e-3) and a.target_d_avg == pytest.approx(
+            t.target_d_avg, abs=1e-4
+        )

@@ -1,4 +1,4 @@
-"""Evaluation: the 50:50 split by scene, scores per split, one deterministic run."""
+"""Evaluation: scores per split, one deterministic run on the paper's split and on another one."""
 
 from __future__ import annotations
 
@@ -8,43 +8,16 @@ import pytest
 
 from model import checkpoint
 from model.data import scene_key
-from model.experiments.evaluation import fold_split, run_once, score
+from model.experiments.evaluation import run_once, score
+from model.experiments.splits import scene_split
 from model.training import train
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
-
-IDS = [
-    f"{a}-{c}-{o}-{k}"
-    for a in ("pull", "show-me")
-    for c in ("red", "blue")
-    for o in ("apple", "dice")
-    for k in range(4)
-]
 
 
 def test_scene_key_strips_the_variant():
     assert scene_key("slide-red-apple-2") == "slide-red-apple"
     assert scene_key("show-me-blue-dice-13") == "show-me-blue-dice"
     assert scene_key("show-me-blue-dice") == "show-me-blue-dice"
-
-
-@pytest.mark.parametrize("fold", [0, 1, 7])
-def test_fold_split_keeps_scenes_whole_and_halves_them(fold):
-    train_idx, test_idx = fold_split(IDS, fold)
-    assert sorted(train_idx + test_idx) == list(range(len(IDS)))
-    train_scenes = {scene_key(IDS[i]) for i in train_idx}
-    test_scenes = {scene_key(IDS[i]) for i in test_idx}
-    assert not train_scenes & test_scenes
-    assert len(train_scenes) == len(test_scenes) == 4
-    assert train_idx == sorted(train_idx)
-
-
-def test_fold_split_is_seeded_per_fold():
-    assert fold_split(IDS, 3, seed=1) == fold_split(IDS, 3, seed=1)
-    splits = {tuple(fold_split(IDS, k)[0]) for k in range(10)}
-    assert len(splits) > 5
-    assert fold_split(IDS, 0, seed=0) != fold_split(IDS, 0, seed=1) or fold_split(
-        IDS, 1, seed=0
-    ) != fold_split(IDS, 1, seed=1)
 
 
 def test_score_reports_every_measure_per_space():
@@ -80,3 +53,22 @@ def test_run_once_is_deterministic_json_and_saves_a_checkpoint(tmp_path):
     _, meta = checkpoint.load(tmp_path / "ck")
     assert meta["fold"] == 1 and meta["metrics"]["test"]["n"] == len(meta["split"]["test"]) == 12
     assert not {scene_key(i) for i in meta["split"]["train"]} & {scene_key(i) for i in meta["split"]["test"]}
+    assert meta["split_kind"] == "scenes" and meta["train_scenes"] is None
+    _, test_idx = scene_split(data.ids, 1)
+    assert meta["split"]["test"] == [data.ids[i] for i in test_idx]
+
+
+def test_run_once_on_the_size_split_trains_on_so_many_scenes_and_says_so(tmp_path):
+    data = tiny_corpus(variants=2)  # 12 scenes: 3 tested, 2 of the other 9 trained on
+    run = run_once(
+        data, "faithful", 0, 0, tiny_config(epochs=1), tmp_path / "ck", split="size", train_scenes=2
+    )
+    _, meta = checkpoint.load(tmp_path / "ck")
+    assert meta["split_kind"] == "size" and meta["train_scenes"] == 2
+    assert len({scene_key(i) for i in meta["split"]["train"]}) == 2 and run.metrics["train"]["n"] == 4
+    assert len({scene_key(i) for i in meta["split"]["test"]}) == 3 and run.metrics["test"]["n"] == 6
+
+
+def test_run_once_refuses_a_size_split_without_its_size_before_training():
+    with pytest.raises(ValueError, match="train_scenes"):
+        run_once(tiny_corpus(variants=1), "faithful", 0, 0, tiny_config(epochs=10_000), split="size")

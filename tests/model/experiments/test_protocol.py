@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sqlite3
@@ -179,3 +180,38 @@ def test_summarise_gives_mean_standard_error_and_extremes_per_split() -> None:
     s = summarise([run(0.2), run(0.4), run(0.9)])["test"]["f1"]
     assert s["n"] == 3 and s["min"] == 0.2 and s["max"] == 0.9
     assert abs(s["mean"] - 0.5) < 1e-12 and abs(s["sem"] - 0.2081665999) < 1e-9
+
+
+@pytest.mark.slow
+def test_a_run_of_the_objects_split_trains_without_the_held_out_objects(tmp_path) -> None:
+    from tests.model.experiments.square_data import square_sequence_set
+
+    data = square_sequence_set()
+    specs = plan("evaluate", "faithful", [1], 1, tiny_config(), data_digest(data), split="objects")
+    (paper,) = plan("evaluate", "faithful", [1], 1, tiny_config(), data_digest(data))
+    assert specs[0].key != paper.key and specs[0].split == "objects"
+    result = run_protocol(data, specs, RunStore(tmp_path), "local", workers=1)
+    (run,) = result.runs
+    assert not result.failed and run.split == "objects"
+    assert run.metrics["train"]["n"] == 12 and run.metrics["test"]["n"] == 4
+    meta = json.loads((Path(run.checkpoint) / "meta.json").read_text())
+    assert meta["split_kind"] == "objects"
+    held = {" ".join(rid.split("-")[-3:-1]) for rid in meta["split"]["test"]}
+    assert held == {"blue banana", "green dice", "red phone", "yellow apple"}  # fold 1's Latin square
+
+
+@pytest.mark.cluster
+def test_ray_runs_the_objects_split_as_the_local_pool_does(tmp_path) -> None:
+    ray = pytest.importorskip("ray")
+    from tests.model.experiments.square_data import square_sequence_set
+
+    data = square_sequence_set()
+    specs = plan("evaluate", "faithful", [3], 1, tiny_config(), data_digest(data), split="objects")
+    local = run_protocol(data, specs, RunStore(tmp_path / "local"), "local", workers=1)
+    try:
+        remote = run_protocol(data, specs, RunStore(tmp_path / "ray"), "ray", workers=1)
+    finally:
+        ray.shutdown()
+    assert not local.failed and not remote.failed
+    assert [(r.split, r.metrics) for r in remote.runs] == [(r.split, r.metrics) for r in local.runs]
+    assert remote.runs[0].metrics["test"]["n"] == 4

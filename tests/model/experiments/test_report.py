@@ -80,3 +80,44 @@ def test_runs_of_different_budgets_are_never_mixed_in_one_row(tmp_path) -> None:
     store.finish(extra.key, _metrics(0.0, 0.0), 1.0)  # one run of another budget: left out
     text = build_report(store, tmp_path / "R.md", tmp_path / "fig").markdown
     assert "faithful (2 folds × 1 inits = 2 runs)" in text and "| train F1 (mean) | 0.952 | 0.8500 |" in text
+
+
+def _split_run(
+    store: RunStore, mode: str, fold: int, split: str, exact: float, size: int | None = None
+) -> None:
+    spec = RunSpec(
+        "evaluate", mode, fold, 0, fold, {"training": {"epochs_auditory": 10}}, {}, "d", split, size
+    )
+    store.register([spec])
+    m = _metrics(1.0, exact)
+    m["test"].update({"slot_action": 1.0, "slot_colour": exact / 2, "slot_object": 0.75})
+    store.finish(spec.key, m, 1.0)
+
+
+def test_each_harder_split_gets_its_table_and_the_size_curve_its_figure(tmp_path) -> None:
+    store = _store(tmp_path)
+    before = build_report(store, tmp_path / "before" / "R.md", tmp_path / "before" / "fig").markdown
+    for fold, exact in enumerate((0.2, 0.4)):
+        _split_run(store, "end_to_end", fold, "objects", exact)
+        _split_run(store, "peer", fold, "objects", exact + 0.4)
+        for size, gain in ((8, 0.0), (16, 0.2), (48, 0.4)):
+            _split_run(store, "end_to_end", fold, "size", exact + gain, size)
+    report = build_report(store, tmp_path / "R.md", tmp_path / "fig")
+    text = report.markdown
+    without = text[: text.index("## Objects never seen")] + text[text.index("## Self-organisation") :]
+    assert without.split("\n", 3)[3] == before.split("\n", 3)[3]  # the rest: as before, byte for byte
+    assert "| mode | exact | phoneme F1 | action | colour | shape |" in text
+    assert (
+        "| end_to_end (2 folds × 1 inits = 2 runs) | 0.150 ± 0.050 | 0.300 ± 0.100 | 1.000 | "
+        "0.150 ± 0.050 | 0.750 |" in text
+    )
+    assert "| peer (2 folds × 1 inits = 2 runs) | 0.350 ± 0.050 |" in text
+    assert "action-object" not in text  # no runs of it: no section
+    assert "| mode | 8 scenes | 16 scenes | 48 scenes |" in text
+    assert "| end_to_end | 0.150 ± 0.050 (2) | 0.250 ± 0.050 (2) | 0.350 ± 0.050 (2) |" in text
+    assert "size_curve.png" in {p.name for p in report.figures}
+    assert (tmp_path / "fig" / "size_curve.png").stat().st_size > 10_000
+    data = json.loads((tmp_path / "fig" / "results.json").read_text())
+    assert [p["train_scenes"] for p in data["size_curve"]["end_to_end"]] == [8, 16, 48]
+    assert set(data["splits"]["objects"]) == {"end_to_end", "peer"}
+    assert data["modes"]["end_to_end"]["runs"] == 2  # the paper's split's runs only

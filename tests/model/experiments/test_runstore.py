@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sqlite3
 
 import pytest
@@ -67,3 +68,47 @@ def test_checkpoint_write_replaces_an_older_attempt(tmp_path) -> None:
     path = store.write_checkpoint("k", {"a": b"2"})
     assert sorted(p.name for p in path.iterdir()) == ["a"] and (path / "a").read_bytes() == b"2"
     assert [p.name for p in store.checkpoint_dir.iterdir()] == ["k"]
+
+
+def test_runs_of_other_splits_get_their_own_keys_and_the_papers_keep_theirs() -> None:
+    a = _spec()
+    assert a.key == "a478fc15606de4d407a3"  # stored before there were other splits: never changes
+    assert dataclasses.replace(a, split="scenes").key == a.key
+    keys = {
+        a.key,
+        dataclasses.replace(a, split="objects").key,
+        dataclasses.replace(a, split="action-object").key,
+        dataclasses.replace(a, split="size", train_scenes=8).key,
+        dataclasses.replace(a, split="size", train_scenes=16).key,
+    }
+    assert len(keys) == 5
+
+
+def test_the_store_keeps_each_runs_split_and_filters_by_it(tmp_path) -> None:
+    store = RunStore(tmp_path)
+    specs = [_spec(), dataclasses.replace(_spec(), split="size", train_scenes=8)]
+    store.register(specs)
+    for spec in specs:
+        store.finish(spec.key, {"test": {"f1": 0.5}}, 1.0)
+    assert [(r.split, r.train_scenes) for r in store.runs()] == [("scenes", None), ("size", 8)]
+    assert [r.key for r in store.runs(split="size")] == [specs[1].key]
+
+
+def test_an_older_store_gains_the_split_columns_with_its_runs_on_the_papers_split(tmp_path) -> None:
+    old = tmp_path / "runs.sqlite"
+    with sqlite3.connect(old) as db:  # the runs table as the first stores wrote it
+        db.executescript(
+            "CREATE TABLE configs (hash TEXT PRIMARY KEY, json TEXT NOT NULL);"
+            "CREATE TABLE runs (key TEXT PRIMARY KEY, experiment TEXT NOT NULL, mode TEXT NOT NULL,"
+            " fold INTEGER NOT NULL, init INTEGER NOT NULL, seed INTEGER NOT NULL, config_hash TEXT NOT NULL,"
+            " params TEXT NOT NULL, data_digest TEXT NOT NULL, status TEXT NOT NULL,"
+            " attempts INTEGER NOT NULL DEFAULT 0, seconds REAL, checkpoint TEXT, host TEXT,"
+            " created REAL NOT NULL, finished REAL,"
+            " error TEXT);"
+            "INSERT INTO configs VALUES ('h', '{}');"
+            "INSERT INTO runs(key, experiment, mode, fold, init, seed, config_hash, params, data_digest,"
+            " status, created) VALUES ('k', 'evaluate', 'faithful', 0, 0, 0, 'h', '{}', 'd', 'done', 0);"
+        )
+    store = RunStore(tmp_path)
+    assert [(r.key, r.split, r.train_scenes) for r in store.runs()] == [("k", "scenes", None)]
+    assert RunStore(tmp_path).runs(split="scenes")[0].key == "k"  # opened again: nothing to add

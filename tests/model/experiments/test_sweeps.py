@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from model.config import ZETA_GAIN
 from model.experiments.protocol import default_config
 from model.experiments.runstore import RunRecord
 from model.experiments.sweeps import (
@@ -35,9 +36,12 @@ def test_cosine_runs_share_seeds_across_psi_and_carry_psi_to_the_runner() -> Non
     specs = cosine_specs([0.0, 5e-5], runs=3)
     assert [s.seed for s in specs[:3]] == [s.seed for s in specs[3:]] == [0, 1, 2]
     assert COSINE_RUNNER == "model.experiments.sweeps:cosine_run"
-    result = cosine_run(None, specs[3].mode, specs[3].fold, specs[3].seed, specs[3].config)
+    assert specs[3].config == {"psi": 5e-5, "optimiser": "paper", "zeta_gain": ZETA_GAIN}
+    result = cosine_run(
+        None, specs[3].mode, specs[3].fold, specs[3].seed, specs[3].config | {"max_epochs": 50}
+    )
     m = result.metrics["cosine"]
-    assert m["epochs"] > 0 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0
+    assert 0 < m["epochs"] <= 50 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0
     assert len(result.artifacts["csc"]) == 4  # four phase-shifted sequences (3.2.2)
 
 
@@ -79,25 +83,32 @@ def test_the_psi_s_table_gives_mean_and_standard_error_per_value() -> None:
     assert mean_sem([])[2] == 0
 
 
-def test_the_cosine_table_groups_by_psi() -> None:
-    runs = [
+def _cosine_runs(rule: dict, epochs: float) -> list[RunRecord]:
+    return [
         RunRecord(
-            f"c{i}",
+            f"c{epochs}{i}",
             "cosine",
             "cosine",
             0,
             i,
             i,
             {},
-            {"psi": 0.0},
+            {"psi": 0.0, **rule},
             "done",
             1,
             1.0,
             None,
             1.0,
-            {"cosine": {"epochs": 100.0 + i, "d_avg": 1.0, "d_rel": 0.9}},
+            {"cosine": {"epochs": epochs + i, "d_avg": 1.0, "d_rel": 0.9}},
         )
         for i in range(2)
     ]
-    (row,) = cosine_table(runs)
+
+
+def test_the_cosine_table_groups_by_psi_within_one_learning_rule() -> None:
+    paper = _cosine_runs({"optimiser": "paper", "zeta_gain": ZETA_GAIN}, 100.0)
+    before = _cosine_runs({}, 7.0)  # stored before the rule was a parameter: sign-based RPROP
+    (row,) = cosine_table(paper + before)
     assert row["psi"] == 0.0 and row["epochs"] == 100.5 and row["runs"] == 2
+    (old,) = cosine_table(paper + before, ("rprop", 1.0))
+    assert old["epochs"] == 7.5

@@ -10,7 +10,8 @@ import torch
 from safetensors.torch import load_file, save_file
 
 from model.checkpoint import load, save
-from model.experiments.evaluation import fold_split, run_once
+from model.experiments.evaluation import run_once
+from model.experiments.splits import scene_split
 from model.multimtrnn import Description
 from model.training import MODES
 from model.training.peer import LEGACY, PeerConfig, PeerModel, train_peer
@@ -56,7 +57,7 @@ def test_training_is_deterministic_and_checkpoints_round_trip(tmp_path) -> None:
 def test_the_peer_uses_the_same_folds_and_metrics_as_the_multimtrnn(tmp_path) -> None:
     data = tiny_sequence_set()
     result = run_once(data, "peer", fold=1, seed=0, config=FAST, out_dir=tmp_path / "ckpt")
-    train_idx, test_idx = fold_split(data.ids, 1, seed=0)
+    train_idx, test_idx = scene_split(data.ids, 1)
     assert result.meta["split"]["test"] == [data.ids[i] for i in test_idx]
     assert set(result.metrics) == {"train", "test", "mixed"}
     for key in ("sentence_exact", "f1", "edit_distance", "word_accuracy", "slot_object", "csc"):

@@ -110,6 +110,7 @@ def test_faithful_training_reduces_every_stage_loss_and_reports_progress():
     assert len(c0) == 12 and len(c0[0]) == result.model.config.auditory.csc
     assert result.csc["auditory_c0"].shape == (12, result.model.config.auditory.csc)
     assert result.meta["mode"] == "faithful" and len(result.meta["ids"]) == 12
+    assert result.meta["config"]["training"]["optimiser"] == "paper"  # eqs. (7)-(10), not sign-based RPROP
     assert result.model.config.generation_steps == result.meta["generation_steps"]
 
 
