@@ -17,8 +17,8 @@ the figure that calibrates eq. (10)'s `zeta_gain` (docs/experiments/faithful.md)
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 
 import torch
 from torch import Tensor, nn
@@ -142,12 +142,27 @@ class _Stacked:
     cfg: MTRNNConfig
 
 
-def train_cosine_runs(psi: float, seeds: list[int], setup: CosineSetup = CosineSetup()) -> list[CosineRun]:
+def train_cosine_runs(
+    psi: float | Sequence[float],
+    seeds: Sequence[int],
+    setup: CosineSetup = CosineSetup(),
+    zeta_gains: Sequence[float] | None = None,
+) -> list[CosineRun]:
     """`train_cosine_once` for several seeds at once: the R networks (each initialised exactly as
     its single run) are stacked and run as one vectorised pass (`torch.func.vmap`), and a run that
     has converged stops learning (zero gradients leave its weights and rates unchanged). The same
     computation as one run at a time but for float rounding (which grows over thousands of epochs,
-    so runs agree in distribution, not digit for digit), an order of magnitude faster. No snapshots."""
+    so runs agree in distribution, not digit for digit), an order of magnitude faster. No snapshots.
+
+    `psi` is one value or one per run; under the paper's rule `zeta_gains` (one per run, default
+    the setup's) lets one pass calibrate eq. (10)'s constant: run r's c_T steps by
+    psi_r * zeta_gains_r * mean eta (eqs. 10, 12)."""
+    psis = [float(psi)] * len(seeds) if isinstance(psi, (int, float)) else [float(p) for p in psi]
+    gains = [setup.zeta_gain] * len(seeds) if zeta_gains is None else [float(g) for g in zeta_gains]
+    if not len(psis) == len(gains) == len(seeds):
+        raise ValueError("need one psi and one zeta gain per seed")
+    if setup.optimiser != "paper" and (len(set(psis)) > 1 or zeta_gains is not None):
+        raise ValueError("per-run psi or zeta gains need the paper's rule (a step size per group otherwise)")
     nets, targets = [], []
     for seed in seeds:
         torch.manual_seed(seed)
@@ -157,10 +172,15 @@ def train_cosine_runs(psi: float, seeds: list[int], setup: CosineSetup = CosineS
     base = _Abstraction(nets[0])
     weight = nn.Parameter(torch.stack([n.weight.detach() for n in nets]))
     bias = nn.Parameter(torch.stack([n.bias.detach() for n in nets]))
-    c_t = nn.Parameter(torch.stack(targets), requires_grad=psi > 0)
+    c_t = nn.Parameter(torch.stack(targets), requires_grad=max(psis) > 0)
     stacked = _Stacked(weight, nets[0].csc_slice, nets[0].cfg)
+    if setup.optimiser == "paper":  # psi_r * gain_r per run, the gain folded into the scale
+        training = replace(setup.training(), zeta_gain=1.0)
+        scale: float | Tensor = torch.tensor([p * g for p, g in zip(psis, gains, strict=True)])[:, None]
+    else:
+        training, scale = setup.training(), psis[0]
     optimiser = make_optimiser(
-        [{"params": [weight, bias]}, {"params": [c_t], "scale": psi, "context_of": stacked}], setup.training()
+        [{"params": [weight, bias]}, {"params": [c_t], "scale": scale, "context_of": stacked}], training
     )
     abstract = torch.func.vmap(
         lambda w, b, x: torch.func.functional_call(base, {"net.weight": w, "net.bias": b}, (x,)),
@@ -179,7 +199,7 @@ def train_cosine_runs(psi: float, seeds: list[int], setup: CosineSetup = CosineS
             break
         optimiser.zero_grad()
         loss = sum(
-            context_abstraction_loss(_view(nets[0], bias[r]), produced[r], c_t[r], psi)
+            context_abstraction_loss(_view(nets[0], bias[r]), produced[r], c_t[r], psis[r])
             for r in range(len(seeds))
             if active[r]
         )
