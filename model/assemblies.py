@@ -58,6 +58,10 @@ class WordAssemblies(nn.Module):
     z = W_s f(c_s,T) + W_v f(c_v,T) + b          eq. (17), one unit per heard word
     p = softmax of z within each slot           (or a logistic per word), winner-take-all
     c_a,0 = E p + e                             the assemblies' projection into MTRNN_a
+
+    `visual_readout` (one entry per slot: the c_v units its word units read, or None for all)
+    masks W_v: with a factorised MTRNN_v (model/training/end_to_end/factors.py) the colour words
+    read only the colour pathway's Csc and the shape words only the shape pathway's.
     """
 
     kind = "words"
@@ -72,6 +76,7 @@ class WordAssemblies(nn.Module):
         hard: bool = True,
         weight_init: float = 0.025,
         seed: int = 0,
+        visual_readout: list[list[int] | None] | None = None,
     ) -> None:
         super().__init__()
         self._kwargs = {
@@ -84,6 +89,8 @@ class WordAssemblies(nn.Module):
             "weight_init": weight_init,
             "seed": seed,
         }
+        if visual_readout is not None:  # only then: earlier checkpoints' kwargs stay as they were
+            self._kwargs["visual_readout"] = [None if r is None else list(r) for r in visual_readout]
         self.sizes = [len(s) for s in slots]
         self.slot_softmax, self.hard = slot_softmax, hard
         words = sum(self.sizes)
@@ -95,6 +102,29 @@ class WordAssemblies(nn.Module):
         self.weight_s, self.bias_s = uniform(words, csc_s), uniform(words)  # W_s and its share of b
         self.weight_v, self.bias_v = uniform(words, csc_v), uniform(words)  # W_v and its share of b
         self.projection, self.projection_bias = uniform(csc_a, words), uniform(csc_a)  # E, e
+        # not in the state dict: rebuilt from the kwargs, so earlier checkpoints load unchanged
+        self.register_buffer("readout_v", self._readout_mask(visual_readout, csc_v), persistent=False)
+        with torch.no_grad():
+            self.weight_v.mul_(self.readout_v)
+
+    def _readout_mask(self, visual_readout: list[list[int] | None] | None, csc_v: int) -> Tensor:
+        """[words, csc_v]: 1 where a word unit reads a c_v unit."""
+        mask = torch.ones(sum(self.sizes), csc_v)
+        if visual_readout is None:
+            return mask
+        if len(visual_readout) != len(self.sizes):
+            raise ValueError(
+                f"visual_readout needs one entry per slot ({len(self.sizes)}), got {len(visual_readout)}"
+            )
+        start = 0
+        for size, units in zip(self.sizes, visual_readout, strict=True):
+            if units is not None:
+                if not units or not all(0 <= u < csc_v for u in units):
+                    raise ValueError(f"visual_readout units must be in 0..{csc_v - 1}, got {units}")
+                mask[start : start + size] = 0
+                mask[start : start + size, units] = 1
+            start += size
+        return mask
 
     @property
     def words(self) -> list[str]:
@@ -116,10 +146,11 @@ class WordAssemblies(nn.Module):
 
     def modality_logits(self, c_s: Tensor, c_v: Tensor) -> tuple[Tensor, Tensor]:
         """Each encoder's share of eq. (17): W_s f(c_s) + b_s and W_v f(c_v) + b_v [..., words]."""
-        return (
-            scaled_logistic(c_s) @ self.weight_s.T + self.bias_s,
-            scaled_logistic(c_v) @ self.weight_v.T + self.bias_v,
-        )
+        return scaled_logistic(c_s) @ self.weight_s.T + self.bias_s, self.visual_logits(c_v)
+
+    def visual_logits(self, c_v: Tensor) -> Tensor:
+        """MTRNN_v's share of eq. (17), W_v f(c_v) + b_v, each word unit reading its c_v units."""
+        return scaled_logistic(c_v) @ (self.weight_v * self.readout_v).T + self.bias_v
 
     def word_logits(self, c_s: Tensor, c_v: Tensor) -> Tensor:
         """z of eq. (17) for the word units."""

@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from model.config import MultiMTRNNConfig, mode_options
+from model.config import LEARNING_RULES, MultiMTRNNConfig, mode_options
 from model.experiments.protocol import apply_overrides, default_config
 from model.experiments.splits import SPLITS, SQUARE_FOLDS
 from model.training.end_to_end.options import EndToEndOptions
@@ -89,7 +89,8 @@ RANGES: dict[str, Range] = {
     **dict.fromkeys(("weight_init", "csc_init"), _floats(0, 10)),
     "io_activation": Range(str, choices=("softmax", "logistic")),
     # training (3.1.4) and the peer's
-    "optimiser": Range(str, choices=("rprop", "adam")),
+    "optimiser": Range(str, choices=LEARNING_RULES),
+    "zeta_gain": _floats(0, 10000),
     **dict.fromkeys(("lr", "lr_max"), _floats(0, 10)),
     **dict.fromkeys(("lr_min", "adam_lr", "alpha", "psi_s", "psi_v"), FRACTION),
     "xi_increase": _floats(1, 2),
@@ -116,6 +117,7 @@ RANGES: dict[str, Range] = {
             "hard_words",
             "vision_centroid",
             "normalise_inputs",
+            "factorised_vision",
         ),
         FLAG,
     ),
@@ -126,7 +128,7 @@ RANGES: dict[str, Range] = {
     "input_noise": _floats(0, 10),
     "vision_window": _ints(0, 1000),
     "time_warp": _floats(0, 0.9),
-    "recombine": _floats(0, 100),
+    **dict.fromkeys(("recombine", "recombine_objects"), _floats(0, 100)),
     "recombine_pairs": _ints(0, 16),
     **dict.fromkeys(("auditory_epochs", "perception_epochs"), EPOCHS),
     **dict.fromkeys(("auditory_check_every", "joint_epochs"), _ints(0, MAX_EPOCHS)),

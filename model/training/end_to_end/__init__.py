@@ -1,6 +1,7 @@
 """Training mode `end_to_end` (the recipe: `mode.py`): the MultiMTRNN learns to describe scenes it
 has never seen. `options` names its additions, `words` the heard word slots, `augmentation` what
-perception reads, `generator` stage 1, `perception` stages 2 and 3."""
+perception reads, `factors` an object's colour and shape as two things (recoloured recordings, a
+factorised MTRNN_v), `generator` stage 1, `perception` stages 2 and 3."""
 
 from model.training.end_to_end.augmentation import InputNormaliser, PerceptionBatch, csc_at, reading_points
 from model.training.end_to_end.generator import combinations_said, train_auditory_stage, train_generator

@@ -46,6 +46,10 @@ Training, top to bottom (`train_end_to_end`):
    `weight_decay` adds an L2 penalty on the weight matrices; `average_from` makes the final
    perception weights the running mean of the weights over the last epochs (Polyak averaging);
    `time_warp` replays every recording at its own random speed each epoch (another teacher's tempo).
+   For colour x shape pairs never seen (issue 16, `factors.py`): `recombine_objects` adds the word
+   loss of recoloured recordings (the colour columns of another recording of another colour, its
+   colour word with them), and `factorised_vision` cuts MTRNN_v into a colour and a shape pathway
+   whose Csc only the colour and the shape slot's word units read.
 3. Joint stage (`joint_epochs`): perception -> CAs -> MTRNN_a, everything through the auditory
    loss (plus the word loss when on). With `word_loss` off this is the only stage: the plain
    2020-style end-to-end training that the options are measured against.
@@ -71,6 +75,7 @@ from model.training.common import (
     make_batch,
 )
 from model.training.end_to_end.augmentation import InputNormaliser, PerceptionBatch
+from model.training.end_to_end.factors import colour_and_shape_slots, csc_pathways, factorise
 from model.training.end_to_end.generator import train_generator
 from model.training.end_to_end.options import EndToEndOptions
 from model.training.end_to_end.perception import selection_split, train_joint_stage, train_perception_stage
@@ -78,9 +83,19 @@ from model.training.end_to_end.words import WordSlots
 
 
 def word_assemblies(
-    config: MultiMTRNNConfig, slots: WordSlots, options: EndToEndOptions, seed: int
+    config: MultiMTRNNConfig,
+    slots: WordSlots,
+    options: EndToEndOptions,
+    seed: int,
+    factors: dict | None = None,
 ) -> WordAssemblies:
-    """The CAs with one word unit per heard phrase (`model.assemblies.WordAssemblies`)."""
+    """The CAs with one word unit per heard phrase (`model.assemblies.WordAssemblies`); with
+    `factorised_vision` the colour slot's units read the colour pathway's c_v, the shape slot's
+    the shape pathway's (`factors`: the slots of `colour_and_shape_slots`)."""
+    readout = None
+    if options.factorised_vision and factors:
+        readout = [None] * len(slots.sizes)
+        readout[factors["colour_slot"]], readout[factors["shape_slot"]] = csc_pathways(config.visual)
     return WordAssemblies(
         config.somatosensory.csc,
         config.visual.csc,
@@ -90,7 +105,18 @@ def word_assemblies(
         hard=options.hard_words,
         weight_init=config.auditory.weight_init,
         seed=seed + 4,
+        visual_readout=readout,
     )
+
+
+def object_factors(data: SequenceSet, slots: WordSlots, options: EndToEndOptions) -> dict:
+    """Which heard slots the colour and the shape columns tell, when an option needs them."""
+    if options.recombine_objects <= 0 and not options.factorised_vision:
+        return {}
+    if len(slots.sizes) < 2:
+        raise ValueError("recombine_objects and factorised_vision need a colour and a shape slot")
+    colour, shape = colour_and_shape_slots(slots.one_hot(data.utterances), slots.sizes, data.vision)
+    return {"colour_slot": colour, "shape_slot": shape}
 
 
 def _train(
@@ -103,8 +129,11 @@ def _train(
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
     slots = WordSlots.from_utterances(data.utterances)
-    assemblies = word_assemblies(config, slots, options, seed)
+    factors = object_factors(data, slots, options)
+    assemblies = word_assemblies(config, slots, options, seed, factors)
     model = MultiMTRNN(config, assemblies=assemblies, seed=seed)
+    if options.factorised_vision:
+        factorise(model.visual)
     batch = make_batch(data, config)
     history: list[dict] = []
     report = ProgressReporter(progress, config.training.progress_every, history)
@@ -122,9 +151,9 @@ def _train(
         batch.vision_lengths,
         slots.one_hot(data.utterances),
     )
-    meta: dict = {"selection": {}}
+    meta: dict = {"selection": {}, **({"factors": factors} if factors else {})}
     if options.word_loss:
-        meta.update(_word_stages(data, model, slots, perception, options, report, seconds, seed))
+        meta.update(_word_stages(data, model, slots, perception, options, report, seconds, seed, factors))
     if options.joint_epochs > 0:
         start = time.perf_counter()
         train_joint_stage(model, assemblies, perception, batch.utterances, options, report)
@@ -150,6 +179,7 @@ def _word_stages(
     report: ProgressReporter,
     seconds: dict[str, float],
     seed: int,
+    factors: dict,
 ) -> dict:
     """Stages 1 and 2: the generator learns to say the heard words, then perception learns which
     words were heard. Returns their meta ("generator", "selection")."""
@@ -167,7 +197,14 @@ def _word_stages(
         if held_idx:
             fit, held_out = perception.subset(fit_idx), perception.subset(held_idx)
     selection = train_perception_stage(
-        model, assemblies, fit, held_out, options, report, torch.Generator().manual_seed(seed + 5)
+        model,
+        assemblies,
+        fit,
+        held_out,
+        options,
+        report,
+        torch.Generator().manual_seed(seed + 5),
+        colour_slot=factors.get("colour_slot"),
     )
     seconds["perception"] = time.perf_counter() - start
     return {"selection": selection, "generator": generator_check}

@@ -25,6 +25,8 @@ class EndToEndOptions:
     time_warp: float = 0.0  # > 0: every epoch each recording replays at a random speed in [1 - w, 1 + w]
     recombine: float = 1.0  # weight of the word loss on recombined pairs (`recombination_loss`)
     recombine_pairs: int = 1  # recombined pairings (random permutations) per epoch
+    recombine_objects: float = 1.0  # word loss weight on recoloured recordings (`factors`)
+    factorised_vision: bool = False  # MTRNN_v: a colour and a shape pathway (`factors`)
     weight_decay: float = 1e-4  # L2 penalty on the encoders' and word units' weight matrices
     average_from: float = 0.5  # > 0: perception weights averaged from this fraction of epochs on
     auditory_epochs: int = 1500  # stage 1, at most, per attempt (docs/experiments/end_to_end.md, rounds 3-4)

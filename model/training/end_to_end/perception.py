@@ -16,6 +16,7 @@ from model.mtrnn import kl_divergence
 from model.multimtrnn import MultiMTRNN
 from model.training.common import ProgressReporter, make_optimiser
 from model.training.end_to_end.augmentation import PerceptionBatch, csc_at, reading_points
+from model.training.end_to_end.factors import recoloured
 from model.training.end_to_end.options import EndToEndOptions
 from model.training.end_to_end.words import WordSlots
 
@@ -137,9 +138,11 @@ def train_perception_stage(
     options: EndToEndOptions,
     report: ProgressReporter,
     generator: torch.Generator,
+    colour_slot: int | None = None,
 ) -> dict:
     """Stage 2: encoders and word units learn the heard words at the reading points (and on
-    recombined pairs, `recombination_loss`). With a held-out set, every `select_every` epochs the
+    recombined pairs, `recombination_loss`; on recoloured recordings of the `colour_slot` with
+    `recombine_objects`). With a held-out set, every `select_every` epochs the
     encoders' gains are calibrated on it and the best state (held-out accuracy, then loss) is
     kept, its gains folded into W_s, W_v; otherwise the final (or averaged) state is kept."""
     params = [
@@ -160,7 +163,7 @@ def train_perception_stage(
     average = _Average(model, options.average_from, epochs)
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
-        loss = _perception_loss(model, assemblies, fit, mix, matrices, options, generator)
+        loss = _perception_loss(model, assemblies, fit, mix, matrices, options, generator, colour_slot)
         loss.backward()
         optimiser.step()
         report("perception", epoch, epochs, loss.item())
@@ -183,9 +186,10 @@ def _perception_loss(
     matrices: list[Tensor],
     options: EndToEndOptions,
     generator: torch.Generator,
+    colour_slot: int | None = None,
 ) -> Tensor:
-    """One epoch's loss: the word loss on the (augmented) recordings, on recombined pairs, and the
-    weight decay."""
+    """One epoch's loss: the word loss on the (augmented) recordings, on recombined pairs, on
+    recoloured recordings, and the weight decay."""
     seen = fit.with_noise(options.input_noise, generator) if options.input_noise > 0 else fit
     if options.time_warp > 0:
         seen = seen.time_warped(options.time_warp, generator)
@@ -201,9 +205,37 @@ def _perception_loss(
         loss = loss + options.recombine * recombination_loss(
             assemblies, z_s, z_v, fit.heard, mix, generator, options.recombine_pairs
         )
+    if options.recombine_objects > 0 and colour_slot is not None:
+        loss = loss + options.recombine_objects * recolouring_loss(
+            model, assemblies, seen, z_s, colour_slot, options, generator
+        )
     if options.weight_decay > 0:
         loss = loss + options.weight_decay * sum((w**2).sum() for w in matrices)
     return loss
+
+
+def recolouring_loss(
+    model: MultiMTRNN,
+    assemblies: WordAssemblies,
+    seen: PerceptionBatch,
+    z_s: Tensor,
+    colour_slot: int,
+    options: EndToEndOptions,
+    generator: torch.Generator,
+) -> Tensor:
+    """Word loss of recoloured recordings (`factors.recoloured`): MTRNN_s reads the recording,
+    MTRNN_v the recording with another recording's colour, and the colour word heard is the
+    donor's: every colour with every shape, also the pairs no teacher showed."""
+    vision, heard = recoloured(
+        seen.vision, seen.vision_lengths, seen.heard, assemblies.sizes, colour_slot, generator
+    )
+    c_v = csc_at(
+        model.visual,
+        vision,
+        seen.vision_lengths,
+        reading_points(seen.vision_lengths, options.word_points, options.word_from),
+    )
+    return assemblies.word_loss(z_s + assemblies.visual_logits(c_v), heard[:, None, :])
 
 
 class _Average:
