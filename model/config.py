@@ -67,7 +67,7 @@ def visual_config(io: int = 19) -> MTRNNConfig:
 LEARNING_RULES = ("paper", "rprop", "adam")
 # eq. (10)'s open constant: zeta_i = ZETA_GAIN * mean eta_ij, calibrated on Fig. 3 alone
 # (docs/experiments/faithful.md, `mtrnn cosine`).
-ZETA_GAIN = 1.0
+ZETA_GAIN = 30.0
 
 
 @dataclass

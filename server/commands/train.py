@@ -51,25 +51,37 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "a named option of the mode, e.g. assemblies_solver=optimum (faithful) or recombine=0 "
         "(end_to_end); repeatable",
     )
+    add_assignments(
+        parser,
+        "--set",
+        "set",
+        "override a config value, e.g. training.optimiser=rprop (faithful learns by the paper's rule "
+        "by default); repeatable",
+    )
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
     parser.set_defaults(func=_train)
 
 
 def _config(args: argparse.Namespace) -> dict:
-    """The mode's default config, its --option values and its epochs scaled; ValueError if bad."""
-    from model.experiments.protocol import default_config
+    """The mode's default config, its --option values, its epochs scaled, then the --set values;
+    ValueError if bad."""
+    from model.experiments.protocol import apply_overrides, default_config
     from server.jobs.presets import scale_epochs
 
     try:
         options = parse_assignments(args.option)
+        overrides = parse_assignments(args.set)
     except ValueError as err:
-        raise ValueError(f"--option takes KEY=VALUE, got {err.args[0]!r}") from None
+        raise ValueError(f"--option and --set take KEY=VALUE, got {err.args[0]!r}") from None
     config = default_config(args.mode)
     if options:
         if "options" not in config:
             raise ValueError(f"mode {args.mode} has no named options")
         config["options"] = options
-    return scale_epochs(config, args.mode, args.epochs_scale)
+    try:
+        return apply_overrides(scale_epochs(config, args.mode, args.epochs_scale), overrides)
+    except KeyError as err:
+        raise ValueError(f"--set: {err.args[0]}") from None
 
 
 class StageBars:

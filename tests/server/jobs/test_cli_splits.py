@@ -66,3 +66,13 @@ def test_the_size_curve_runs_one_protocol_per_size_against_the_same_novel_scenes
     assert sorted(r.train_scenes for r in runs) == [2, 4]
     assert [r.metrics["train"]["n"] for r in sorted(runs, key=lambda r: r.train_scenes)] == [8, 16]
     assert {r.metrics["test"]["n"] for r in runs} == {64}  # the 16 novel scenes x 4 recordings
+
+
+def test_train_takes_config_overrides_and_names_a_bad_one(tmp_path, capsys) -> None:
+    out = tmp_path / "rprop"
+    argv = ["train", "--mode", "faithful", "--out", str(out), "--epochs-scale", "0.01", "--json"]
+    assert main([*argv, "--set", "training.optimiser=rprop"]) == 0
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["config"]["training"]["optimiser"] == "rprop"  # the shipped faithful model's reading
+    assert main([*argv, "--set", "training.no_such_key=1"]) == 2
+    assert "unknown config key 'training.no_such_key'" in capsys.readouterr().out
