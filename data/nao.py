@@ -125,14 +125,19 @@ def inverse_kinematics(
     posture_gain: float = 0.02,
     max_iterations: int = 300,
     tolerance: float = 1e-4,
+    preference: np.ndarray | None = None,
+    min_iterations: int = 0,
 ) -> np.ndarray:
     """Joint angles [5] that put the hand at `target_xyz` (metres, torso frame).
 
     Damped least squares, dq = J^T (J J^T + damping^2 I)^-1 e, started from `q0` (default:
     `REST_POSTURE`), clipped to `JOINT_LIMITS` after every step. The redundancy (5 joints, 3
     coordinates) is resolved by a small null-space pull towards `q0`, so consecutive targets
-    solved from the previous solution give a smooth trajectory. `wrist_yaw`, if given, fixes
-    RWristYaw and the other four joints reach the target. Deterministic.
+    solved from the previous solution give a smooth trajectory; or, if `preference` [5] is given,
+    towards that posture during the first `min_iterations` steps of every call (then the hand task
+    alone converges), so that a trajectory solved frame by frame settles into the preferred
+    solution (e.g. elbow high or low). `wrist_yaw`, if
+    given, fixes RWristYaw and the other four joints reach the target. Deterministic.
     """
     target = np.asarray(target_xyz, dtype=float)
     if target.shape != (3,):
@@ -143,17 +148,23 @@ def inverse_kinematics(
     if wrist_yaw is not None:
         q[4] = np.clip(wrist_yaw, JOINT_LIMITS[4, 0], JOINT_LIMITS[4, 1])
         active[4] = False
-    anchor = q.copy()
-    for _ in range(max_iterations):
+    anchor = q.copy() if preference is None else _check_q(preference)
+    for iteration in range(max_iterations):
         origins, axes, hand = _chain(q)
         error = target - hand
-        if np.linalg.norm(error) < tolerance:
+        if iteration >= min_iterations and np.linalg.norm(error) < tolerance:
             break
         jac = np.cross(axes, hand - origins).T[:, active]  # [3, n_active], revolute joints
         jjt = jac @ jac.T + damping**2 * np.eye(3)
         step = jac.T @ np.linalg.solve(jjt, error)
         # null-space projection of the posture pull keeps the hand task first
         null = np.eye(jac.shape[1]) - jac.T @ np.linalg.solve(jjt, jac)
-        step = step + posture_gain * null @ (anchor - q)[active]
+        pull = posture_gain if preference is None or iteration < min_iterations else 0.0
+        step = step + pull * null @ (anchor - q)[active]
         q[active] = np.clip(q[active] + step, JOINT_LIMITS[active, 0], JOINT_LIMITS[active, 1])
     return q
+
+
+# Posture every paper recording starts from (hand raised to the right, above the table's near edge).
+HOME_POSTURE: np.ndarray = inverse_kinematics(np.array([0.15, -0.17, 0.0]))
+HOME_POSTURE.setflags(write=False)

@@ -5,18 +5,20 @@
     COL -> blue | green | red | yellow
     OBJ -> apple | banana | dice | phone
 
-Every scene was recorded four times (variants 0..3), by different teachers.
+Every scene was recorded four times (variants 0..3), by different teachers; the wide corpus
+(`data.variety`) records each up to 16 times (variants 0..15).
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from itertools import product
 
 ACTIONS: tuple[str, ...] = ("pull", "push", "show me", "slide")
 COLOURS: tuple[str, ...] = ("blue", "green", "red", "yellow")
 SHAPES: tuple[str, ...] = ("apple", "banana", "dice", "phone")
-VARIANTS: tuple[int, ...] = (0, 1, 2, 3)
+VARIANTS: tuple[int, ...] = tuple(range(16))  # recordings of a scene: the paper's corpus has 0..3
 
 # Fig. 5b: the instructions the human teachers were given.
 TEACHING_INSTRUCTIONS: dict[str, str] = {
@@ -79,18 +81,18 @@ def scene_from_utterance(utterance: str) -> Scene:
 def recording_id(scene: Scene, variant: int) -> str:
     """Readable id of one recording, e.g. ``slide-red-apple-2``."""
     if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant}")
+        raise ValueError(f"variant must be one of {VARIANTS[0]}..{VARIANTS[-1]}, got {variant}")
     return f"{scene.id}-{variant}"
 
 
 def parse_recording_id(rid: str) -> tuple[Scene, int]:
     """Inverse of `recording_id`; raises ValueError naming what is wrong."""
     parts = rid.split("-")
-    if len(parts) < 4 or not parts[-1].isdigit():
+    if len(parts) < 4 or not re.fullmatch(r"0|[1-9][0-9]*", parts[-1]):
         raise ValueError(f"{rid!r} is not a recording id like 'slide-red-apple-2'")
     action = " ".join(parts[:-3])
     scene = Scene(action, parts[-3], parts[-2])
-    variant = int(parts[-1])
+    variant = int(parts[-1]) if len(parts[-1]) <= 2 else -1
     if variant not in VARIANTS:
-        raise ValueError(f"{rid!r}: variant must be one of {VARIANTS}")
+        raise ValueError(f"{rid!r}: variant must be one of {VARIANTS[0]}..{VARIANTS[-1]}")
     return scene, variant

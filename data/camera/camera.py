@@ -80,7 +80,7 @@ class Appearance:
     specular: float
     object_scale: float  # shape proportions vary a little between object sets
     banana_bend: float  # (m) how far the banana's middle bulges
-    dice_pips: int  # pips on the dice's top face
+    dice_pips: int  # pips on the dice's top face (0: a plain dice, no pips at all)
     seed: int  # texture and noise
     width: int = WIDTH
     height: int = HEIGHT
@@ -178,11 +178,11 @@ class Camera:
     def depth(self, points: np.ndarray) -> np.ndarray:
         return self.to_camera(np.atleast_2d(points))[:, 2]
 
-    def table_homography(self) -> np.ndarray:
-        """Texel (col, row) of the table texture -> pixel."""
+    def table_homography(self, table_z: float) -> np.ndarray:
+        """Texel (col, row) of the table texture (the table top at height `table_z`) -> pixel."""
         dx = (TEX_X[1] - TEX_X[0]) / TEX_SIZE
         dy = (TEX_Y[1] - TEX_Y[0]) / TEX_SIZE
-        texel_to_world = np.array([[0.0, dx, TEX_X[0]], [dy, 0.0, TEX_Y[0]], [0.0, 0.0, TABLE_Z]])
+        texel_to_world = np.array([[0.0, dx, TEX_X[0]], [dy, 0.0, TEX_Y[0]], [0.0, 0.0, table_z]])
         k = np.array([[self.focal, 0.0, self.centre[0]], [0.0, self.focal, self.centre[1]], [0.0, 0.0, 1.0]])
         return k @ (self.rotation @ texel_to_world + np.outer(self.translation, [0.0, 0.0, 1.0]))
 

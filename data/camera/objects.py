@@ -8,15 +8,15 @@ import numpy as np
 
 from data.camera.camera import NEAR, Appearance, Camera, hsv_to_rgb, rot_z
 from data.camera.raster import cv_pts, draw_prism, fill, object_outline, shading, to_world
-from data.world import OBJECT_SIZE, TABLE_Z
+from data.world import World
 
 
 def _draw_apple(
-    img: np.ndarray, cam: Camera, app: Appearance, xy: np.ndarray, yaw: float, rgb: np.ndarray
+    img: np.ndarray, cam: Camera, app: Appearance, world: World, xy: np.ndarray, yaw: float, rgb: np.ndarray
 ) -> None:
-    """Ray-cast sphere with Lambert + Phong shading, a stem and a leaf."""
-    radius = OBJECT_SIZE["apple"][0] * app.object_scale
-    centre = np.array([xy[0], xy[1], TABLE_Z + 0.92 * radius])
+    """Ray-cast sphere with Lambert + Phong shading, a stem and a leaf (if the world's apple has them)."""
+    radius = world.size("apple")[0] * app.object_scale
+    centre = np.array([xy[0], xy[1], world.table_z + 0.92 * radius])
     uv = cam.project(centre[None])[0]
     r_px = cam.focal * radius / max(cam.depth(centre)[0], NEAR) * 1.35
     u0, u1 = int(max(uv[0] - r_px, 0)), int(min(uv[0] + r_px + 1, app.width))
@@ -44,6 +44,14 @@ def _draw_apple(
     alpha = np.clip(np.sqrt(np.where(hit, disc, 0.0)) / radius * 6.0, 0.0, 1.0)[..., None]
     roi = img[v0:v1, u0:u1]
     roi[:] = np.clip(roi * (1 - alpha) + colour * alpha, 0, 255).astype(img.dtype)
+    if world.apple_stem:
+        _draw_stem(img, cam, app, centre, radius, yaw)
+
+
+def _draw_stem(
+    img: np.ndarray, cam: Camera, app: Appearance, centre: np.ndarray, radius: float, yaw: float
+) -> None:
+    """The apple's stem and leaf on top of the sphere at `centre`."""
     top = centre + np.array([0.0, 0.0, 0.9 * radius])
     c, s = np.cos(yaw), np.sin(yaw)
     stem_tip = top + np.array([0.003 * c, 0.003 * s, 0.009])
@@ -59,22 +67,31 @@ def _draw_apple(
 
 
 def draw_object(
-    img: np.ndarray, cam: Camera, app: Appearance, shape: str, xy: np.ndarray, yaw: float, rgb: np.ndarray
+    img: np.ndarray,
+    cam: Camera,
+    app: Appearance,
+    world: World,
+    shape: str,
+    xy: np.ndarray,
+    yaw: float,
+    rgb: np.ndarray,
 ) -> None:
     if shape == "apple":
-        _draw_apple(img, cam, app, xy, yaw, rgb)
+        _draw_apple(img, cam, app, world, xy, yaw, rgb)
         return
-    local, height = object_outline(shape, app)
+    local, height = object_outline(shape, app, world)
     footprint = to_world(local, xy, yaw, 0.0)[:, :2]
-    top = draw_prism(img, cam, app, footprint, TABLE_Z, TABLE_Z + height, rgb)
+    table_z = world.table_z
+    top = draw_prism(img, cam, app, footprint, table_z, table_z + height, rgb)
     up = shading(np.array([0.0, 0.0, 1.0]), app)
-    if shape == "phone":  # a dark glossy screen, inset from the rim, keeping a tint of the case
-        half_x, half_y, _ = OBJECT_SIZE["phone"]
+    if shape == "phone" and world.phone_screen != "none":  # a glossy screen, inset from the rim
+        half_x, half_y, _ = world.size("phone")
         k = app.object_scale
         sx0, sx1, sy = half_x * k - 0.008, -half_x * k + 0.005, half_y * k - 0.003
         screen = np.array([[sx0, sy], [sx1, sy], [sx1, -sy], [sx0, -sy]])
-        uv = cam.project(to_world(screen, xy, yaw, TABLE_Z + height + 0.0005))
-        fill(img, uv, rgb * 0.42 * up)
+        uv = cam.project(to_world(screen, xy, yaw, table_z + height + 0.0005))
+        shade = 0.42 if world.phone_screen == "dark" else 0.7  # keeping a tint of the case
+        fill(img, uv, rgb * shade * up)
         glare = np.array(
             [
                 uv[0] * 0.8 + uv[1] * 0.2,
@@ -83,20 +100,20 @@ def draw_object(
                 uv[2] * 0.8 + uv[3] * 0.2,
             ]
         )
-        fill(img, glare, rgb * 0.42 * up + 40.0 * app.specular)
+        fill(img, glare, rgb * shade * up + 40.0 * app.specular)
     elif shape == "banana":  # a lit ridge and brown tips
         s = np.linspace(-0.8, 0.8, 12)
-        half_y = OBJECT_SIZE["banana"][1] * app.object_scale
+        half_y = world.size("banana")[1] * app.object_scale
         ridge = np.stack([app.banana_bend * (1 - s**2), half_y * s], 1)
-        uv = cam.project(to_world(ridge, xy, yaw, TABLE_Z + height + 0.001))
-        width = max(1, int(round(cam.focal * 0.005 / cam.depth(np.append(xy, TABLE_Z))[0])))
+        uv = cam.project(to_world(ridge, xy, yaw, table_z + height + 0.001))
+        width = max(1, int(round(cam.focal * 0.005 / cam.depth(np.append(xy, table_z))[0])))
         ridge_rgb = np.clip(rgb * up * 1.18, 0, 255).tolist()
         cv2.polylines(img, [cv_pts(uv)], False, ridge_rgb, width, cv2.LINE_AA, 4)
         n = len(top) // 2
         for tip in (top[0], top[n - 1]):
             cv2.circle(img, tuple(cv_pts(tip)), 2 * 16, (70.0, 52.0, 30.0), -1, cv2.LINE_AA, shift=4)
-    elif shape == "dice":
-        _draw_pips(img, cam, app, xy, yaw, height)
+    elif shape == "dice" and app.dice_pips > 0:
+        _draw_pips(img, cam, app, xy, yaw, table_z, height)
 
 
 _PIP_LAYOUT: dict[int, list[tuple[float, float]]] = {
@@ -110,7 +127,7 @@ _PIP_LAYOUT: dict[int, list[tuple[float, float]]] = {
 
 
 def _draw_pips(
-    img: np.ndarray, cam: Camera, app: Appearance, xy: np.ndarray, yaw: float, side: float
+    img: np.ndarray, cam: Camera, app: Appearance, xy: np.ndarray, yaw: float, table_z: float, side: float
 ) -> None:
     """White pips on the top face and on the side faces that face the camera."""
     half = side / 2
@@ -123,7 +140,7 @@ def _draw_pips(
         (np.array([0.0, half, 0.0]), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), 6 - app.dice_pips % 6),
     ]
     rot = rot_z(yaw)
-    centre = np.array([xy[0], xy[1], TABLE_Z + half])
+    centre = np.array([xy[0], xy[1], table_z + half])
     for offset, u, v, count in faces:
         face_centre = centre + rot @ offset
         normal = rot @ offset / half

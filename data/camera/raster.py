@@ -12,7 +12,7 @@ import numpy as np
 from data.camera.camera import NEAR, TEX_SIZE, TEX_X, Appearance, Camera, hsv_to_rgb
 from data.nao import arm_pose
 from data.scenario import Scene
-from data.world import OBJECT_SIZE, TABLE_Z
+from data.world import World
 
 NAO_WHITE = np.array([232.0, 232.0, 226.0])
 NAO_GREY = np.array([118.0, 121.0, 128.0])
@@ -68,9 +68,19 @@ def fill(img: np.ndarray, uv: np.ndarray, colour: np.ndarray) -> None:
     cv2.fillPoly(img, [cv_pts(uv)], np.clip(colour, 0, 255).tolist(), cv2.LINE_AA, shift=4)
 
 
-def object_outline(shape: str, app: Appearance) -> tuple[np.ndarray, float]:
+def _rounded_rectangle(a: float, b: float, r: float) -> np.ndarray:
+    """Outline of a rectangle with corners of radius `r` whose straight edges end at (+-a, +-b)."""
+    t = np.linspace(0, np.pi / 2, 5)
+    corners = []
+    for (cx, cy), start in zip([(a, b), (-a, b), (-a, -b), (a, -b)], [0, 0.5, 1.0, 1.5], strict=True):
+        ang = t + start * np.pi
+        corners.append(np.stack([cx + r * np.cos(ang), cy + r * np.sin(ang)], 1))
+    return np.concatenate(corners)
+
+
+def object_outline(shape: str, app: Appearance, world: World) -> tuple[np.ndarray, float]:
     """Closed counter-clockwise footprint [n,2] in the object frame (m) and the height (m)."""
-    half_x, half_y, height = OBJECT_SIZE[shape]
+    half_x, half_y, height = world.size(shape)
     k = app.object_scale
     if shape == "banana":
         s = np.linspace(-1.0, 1.0, 24)
@@ -82,16 +92,13 @@ def object_outline(shape: str, app: Appearance) -> tuple[np.ndarray, float]:
         outline = np.concatenate([centre + normal * width[:, None], (centre - normal * width[:, None])[::-1]])
     elif shape == "phone":
         r = 0.006
-        a, b = half_x * k - r, half_y * k - r
-        t = np.linspace(0, np.pi / 2, 5)
-        corners = []
-        for (cx, cy), start in zip([(a, b), (-a, b), (-a, -b), (a, -b)], [0, 0.5, 1.0, 1.5], strict=True):
-            ang = t + start * np.pi
-            corners.append(np.stack([cx + r * np.cos(ang), cy + r * np.sin(ang)], 1))
-        outline = np.concatenate(corners)
+        outline = _rounded_rectangle(half_x * k - r, half_y * k - r, r)
     else:  # dice
         h = half_x * k
-        outline = np.array([[h, h], [-h, h], [-h, -h], [h, -h]])
+        r = world.dice_round * h
+        outline = (
+            _rounded_rectangle(h - r, h - r, r) if r > 0 else np.array([[h, h], [-h, h], [-h, -h], [h, -h]])
+        )
         height = 2 * h
     area2 = np.sum(outline[:, 0] * np.roll(outline[:, 1], -1) - np.roll(outline[:, 0], -1) * outline[:, 1])
     return (outline if area2 > 0 else outline[::-1]), height
@@ -217,29 +224,39 @@ def draw_arm(img: np.ndarray, cam: Camera, app: Appearance, arm: Arm) -> None:
     _draw_box(img, cam, app, arm.palm, NAO_GREY * 1.4)
 
 
-def _on_table(points: np.ndarray, light: np.ndarray) -> np.ndarray:
-    """Shadow of points [n,3] cast on the table plane along the light direction."""
-    return points - light[None, :] * ((points[:, 2] - TABLE_Z) / light[2])[:, None]
+def _on_table(points: np.ndarray, light: np.ndarray, table_z: float) -> np.ndarray:
+    """Shadow of points [n,3] cast on the table plane (height `table_z`) along the light direction."""
+    return points - light[None, :] * ((points[:, 2] - table_z) / light[2])[:, None]
 
 
 def draw_shadows(
-    mask: np.ndarray, cam: Camera, app: Appearance, scene: Scene, xy: np.ndarray, yaw: float, arm: Arm
+    mask: np.ndarray,
+    cam: Camera,
+    app: Appearance,
+    world: World,
+    scene: Scene,
+    xy: np.ndarray,
+    yaw: float,
+    arm: Arm,
 ) -> None:
     light = np.asarray(app.light_direction)
+    table_z = world.table_z
     if scene.shape == "apple":
-        r = OBJECT_SIZE["apple"][0] * app.object_scale
+        r = world.size("apple")[0] * app.object_scale
         ang = np.linspace(0, 2 * np.pi, 16, endpoint=False)
         local = np.stack([r * np.cos(ang), r * np.sin(ang)], 1)
         height = 1.9 * r
     else:
-        local, height = object_outline(scene.shape, app)
-    base = to_world(local, xy, yaw, TABLE_Z)
-    raised = to_world(local, xy, yaw, TABLE_Z + 0.8 * height)
-    hull = cv2.convexHull(cam.project(np.concatenate([base, _on_table(raised, light)])).astype(np.float32))
+        local, height = object_outline(scene.shape, app, world)
+    base = to_world(local, xy, yaw, table_z)
+    raised = to_world(local, xy, yaw, table_z + 0.8 * height)
+    hull = cv2.convexHull(
+        cam.project(np.concatenate([base, _on_table(raised, light, table_z)])).astype(np.float32)
+    )
     cv2.fillPoly(mask, [cv_pts(hull[:, 0])], 255, cv2.LINE_AA, shift=4)
     p = arm.points
     chain = np.array([p["shoulder"], p["elbow"], p["wrist"], arm.fingers.mean(axis=0)])
-    flat = _on_table(chain, light)
+    flat = _on_table(chain, light, table_z)
     for (a, b), radius in zip([(0, 1), (1, 2), (2, 3)], (0.027, 0.022, 0.02), strict=True):
         clipped = _clip_segment(cam, flat[a], flat[b])
         if clipped is None:
@@ -252,15 +269,15 @@ def draw_shadows(
 MARGIN = 12  # pixels of table rendered beyond each image border, for the head jitter
 
 
-def empty_table(app: Appearance, cam: Camera, rng: np.random.Generator) -> np.ndarray:
-    """The lit, empty table as seen by `cam`, with a margin: uint8 [H+2m, W+2m, 3]."""
+def empty_table(app: Appearance, cam: Camera, rng: np.random.Generator, table_z: float) -> np.ndarray:
+    """The lit, empty table (its top at `table_z`) as seen by `cam`, with a margin: uint8 [H+2m, W+2m, 3]."""
     texture = _table_texture(app, rng)
     background = tuple(float(v) for v in hsv_to_rgb(*app.background_hsv))
     shift = np.array([[1.0, 0.0, MARGIN], [0.0, 1.0, MARGIN], [0.0, 0.0, 1.0]])
     size = (app.width + 2 * MARGIN, app.height + 2 * MARGIN)
     table = cv2.warpPerspective(
         texture,
-        shift @ cam.table_homography(),
+        shift @ cam.table_homography(table_z),
         size,
         flags=cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT,

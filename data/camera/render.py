@@ -11,15 +11,19 @@ from data.camera.objects import draw_object
 from data.camera.raster import MARGIN, Arm, draw_arm, draw_shadows, empty_table
 from data.motion import Motion
 from data.scenario import Scene
-from data.world import OBJECT_HOME, TABLE_Z
+from data.world import PAPER_WORLD, World
 
 
-def render_frames(scene: Scene, motion: Motion, appearance: Appearance) -> np.ndarray:
-    """The camera's view at every time step of `motion`: uint8 [T, height, width, 3] RGB."""
+def render_frames(
+    scene: Scene, motion: Motion, appearance: Appearance, world: World = PAPER_WORLD
+) -> np.ndarray:
+    """The camera's view at every time step of `motion` in `world` (table and object; default the
+    paper's): uint8 [T, height, width, 3] RGB."""
     app = appearance
+    table_z = world.table_z
     rng = np.random.default_rng(app.seed)
     base_cam = camera_of(app)
-    table = empty_table(app, base_cam, rng)
+    table = empty_table(app, base_cam, rng, table_z)
     rgb = app.object_rgb(scene.colour)
     gains = tuple(float(g) * app.exposure for g in app.white_balance) + (0.0,)
     n = len(motion.joints)
@@ -32,7 +36,7 @@ def render_frames(scene: Scene, motion: Motion, appearance: Appearance) -> np.nd
     offsets = rng.integers(0, 32, (n, 2))
     frames = np.empty((n, app.height, app.width, 3), dtype=np.uint8)
     mask = np.empty((app.height, app.width), dtype=np.uint8)
-    anchor = np.append(OBJECT_HOME, TABLE_Z)
+    anchor = np.append(world.object_home, table_z)
     for t in range(n):
         cam = camera_of(app, shake[t, 0], shake[t, 1]) if app.shake > 0 else base_cam
         dx, dy = np.clip(
@@ -42,7 +46,7 @@ def render_frames(scene: Scene, motion: Motion, appearance: Appearance) -> np.nd
         arm = Arm.at(motion.joints[t])
         xy, yaw = motion.object_xy[t], float(motion.object_yaw[t])
         mask[:] = 0
-        draw_shadows(mask, cam, app, scene, xy, yaw, arm)
+        draw_shadows(mask, cam, app, world, scene, xy, yaw, arm)
         x0, y0, w, h = cv2.boundingRect(mask)
         if w > 0 and h > 0:
             x0, y0 = max(x0 - 4, 0), max(y0 - 4, 0)
@@ -51,11 +55,11 @@ def render_frames(scene: Scene, motion: Motion, appearance: Appearance) -> np.nd
             img[box] = cv2.multiply(img[box], cv2.merge([light, light, light]), scale=1.0 / 255.0)
         # the arm is drawn after the object unless the hand is behind it and low (e.g. pulling)
         hand = arm.points["hand"]
-        behind = cam.depth(hand)[0] > cam.depth(np.append(xy, TABLE_Z))[0] + 0.01
-        hand_behind = bool(behind and hand[2] < TABLE_Z + 0.05)
+        behind = cam.depth(hand)[0] > cam.depth(np.append(xy, table_z))[0] + 0.01
+        hand_behind = bool(behind and hand[2] < table_z + 0.05)
         if hand_behind:
             draw_arm(img, cam, app, arm)
-        draw_object(img, cam, app, scene.shape, xy, yaw, rgb)
+        draw_object(img, cam, app, world, scene.shape, xy, yaw, rgb)
         if not hand_behind:
             draw_arm(img, cam, app, arm)
         img = cv2.multiply(img, gains)  # exposure and white balance

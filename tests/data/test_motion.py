@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from data.motion import HOME_POSTURE, Motion, Teacher, generate_motion, retimed
-from data.nao import JOINT_LIMITS, forward_kinematics
+from data.motion import Motion, Teacher, generate_motion, retimed
+from data.nao import HOME_POSTURE, JOINT_LIMITS, forward_kinematics
 from data.scenario import ACTIONS, COLOURS, SHAPES, Scene, all_scenes
 from data.world import FPS, TABLE_Z
 

@@ -16,7 +16,7 @@ from data.recording import write_zip
 
 pytestmark = pytest.mark.browser
 
-RID = "slide-red-apple-2"  # the shipped default model says "show me" first, "slide" from 3.55 s
+RID = "slide-red-apple-2"  # a sliding action, whose description changes as the recording goes on
 
 
 def runs(timeline: dict) -> list[tuple[float, str]]:

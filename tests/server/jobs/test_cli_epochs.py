@@ -12,7 +12,7 @@ from server.commands.train import StageBars, _config
 
 
 def _args(mode: str, scale: float, options: list[str] | None = None) -> argparse.Namespace:
-    return argparse.Namespace(mode=mode, epochs_scale=scale, option=options or [])
+    return argparse.Namespace(mode=mode, epochs_scale=scale, option=options or [], set=[])
 
 
 def test_epochs_scale_shortens_end_to_end_and_peer_too() -> None:
