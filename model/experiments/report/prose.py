@@ -5,14 +5,30 @@ from __future__ import annotations
 
 import math
 
+NAMES = {"f1": "F1", "edit_distance": "edit distance"}
 
-def explain(mode: str, split: str, metric: str, ours: float, paper: float, budget_cut: bool) -> str:
-    """One sentence on why our number differs from the paper's (the paper trained `faithful` only)."""
-    diff = ours - paper
-    better = (diff > 0) == (metric == "f1")
-    if abs(diff) < 0.02:
-        return f"{mode} {split} {metric}: {ours:.3f}, within 0.02 of the paper's {paper:g}."
-    size = f"{abs(diff):.3f} {'better' if better else 'worse'} than the paper's {paper:g}"
+
+def explain(mode: str, split: str, values: dict[str, tuple[float, float]], budget_cut: bool) -> str:
+    """One sentence per mode and split: each measure beside the paper's (`values`: measure -> (ours,
+    paper)), then why they differ, said once (the paper trained `faithful` only)."""
+    parts, directions = [], []
+    for metric, (ours, paper) in values.items():
+        diff = ours - paper
+        if abs(diff) < 0.02:
+            parts.append(f"{NAMES[metric]} {ours:.3f} (within 0.02 of the paper's {paper:g})")
+            continue
+        better = (diff > 0) == (metric == "f1")
+        directions.append(better)
+        size = f"{abs(diff):.3f} {'better' if better else 'worse'}"
+        parts.append(f"{NAMES[metric]} {ours:.3f} ({size} than the paper's {paper:g})")
+    sentence = f"{mode} {split}: " + ", ".join(parts)
+    if not directions:
+        return sentence + "."
+    return f"{sentence}; most likely because {_cause(mode, split, directions[0], budget_cut)}."
+
+
+def _cause(mode: str, split: str, better: bool, budget_cut: bool) -> str:
+    """Why `mode`'s numbers on `split` are better or worse than the paper's."""
     budget = " (and with a smaller epoch budget than Table 1's)" if budget_cut else ""
     corpus = (
         "our corpus (simulated teachers, rendered frames) is more regular than the NAO recordings, so "
@@ -52,7 +68,7 @@ def explain(mode: str, split: str, metric: str, ours: float, paper: float, budge
             else f"{corpus}, and the peer, trained closed-loop on every training recording, binds its "
             "perception code to the whole utterance"
         )
-    return f"{mode} {split} {metric}: {ours:.3f}, {size}, most likely because {why}."
+    return why
 
 
 def psi_sentence(table: list[dict]) -> str:

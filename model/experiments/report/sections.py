@@ -130,10 +130,13 @@ def _beside_the_paper(page: Page, evaluate: dict[str, list[RunRecord]], summarie
     for m in evaluate:
         cut = m == "faithful" and budget(evaluate[m]) != paper_budget()  # Table 1 is faithful's
         for split in ("train", "test"):
-            for metric in ("f1", "edit_distance"):
-                ours = summaries[m].get(split, {}).get(metric, {}).get("mean")
-                if ours is not None:
-                    page.md.append("- " + prose.explain(m, split, metric, ours, PAPER[split][metric], cut))
+            values = {
+                metric: (ours, PAPER[split][metric])
+                for metric in ("f1", "edit_distance")
+                if (ours := summaries[m].get(split, {}).get(metric, {}).get("mean")) is not None
+            }
+            if values:
+                page.md.append("- " + prose.explain(m, split, values, cut))
     page.md.append("")
 
 
