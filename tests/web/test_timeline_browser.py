@@ -51,9 +51,11 @@ def test_the_timeline_strip_follows_the_cursor(page, base_url: str) -> None:  # 
     for k in sorted({0, len(listed) // 2, len(listed) - 1}):
         start, text = listed[k]
         end = listed[k + 1][0] if k + 1 < len(listed) else timeline["t"][-1] + 1 / timeline["fps"]
-        t = round((start + end) / 2 - 0.5 / timeline["fps"], 2)  # inside the run, on a step
+        fps = timeline["fps"]
+        step = (round(start * fps) + round(end * fps) - 1) // 2  # the middle step of the run, even of 2 steps
+        t = round(step / fps, 2)
         move_cursor(page, t)
-        step = min(round(t * timeline["fps"]), len(timeline["utterance"]) - 1)
+        step = min(step, len(timeline["utterance"]) - 1)
         assert highlighted(page) == f"at {start:.2f} s: {text or '(silence)'}"
         assert page.locator("#timeline-now").inner_text() == (timeline["utterance"][step] or "(silence)")
     assert page.locator("#timeline-strip [aria-current='step']").count() == 1
