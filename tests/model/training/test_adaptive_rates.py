@@ -37,15 +37,22 @@ def test_rates_grow_while_the_sign_holds_and_shrink_when_it_flips_within_bounds(
     assert optimiser.rates(p)[0] == pytest.approx(0.0506)
 
 
-def test_zeta_is_the_gain_times_the_mean_rate_of_a_csc_units_weights_from_cf_and_cs():
+def _small_net() -> MTRNN:
     cfg = MTRNNConfig(io=2, cf=3, cs=4, tau_io=2, tau_cf=5, tau_cs=16, csc=2)
-    net = MTRNN(cfg, torch.Generator().manual_seed(0))
-    c0 = nn.Parameter(torch.zeros(5, cfg.csc))
-    training = TrainingConfig(optimiser="paper", zeta_gain=10.0)
-    optimiser = make_optimiser(
-        [{"params": list(net.parameters())}, {"params": [c0], "context_of": net}], training
-    )
+    return MTRNN(cfg, torch.Generator().manual_seed(0))
+
+
+def _paper_rule(net: MTRNN, context: nn.Parameter, zeta_gain: float, scale: float = 1.0) -> AdaptiveRates:
+    groups = [{"params": list(net.parameters())}, {"params": [context], "scale": scale, "context_of": net}]
+    optimiser = make_optimiser(groups, TrainingConfig(optimiser="paper", zeta_gain=zeta_gain))
     assert isinstance(optimiser, AdaptiveRates)
+    return optimiser
+
+
+def test_zeta_is_the_gain_times_the_mean_rate_of_a_csc_units_weights_from_cf_and_cs():
+    net = _small_net()
+    cfg = net.cfg
+    optimiser = _paper_rule(net, nn.Parameter(torch.zeros(5, cfg.csc)), zeta_gain=10.0)
     assert torch.allclose(optimiser.zeta(net, 10.0), torch.full((2,), 0.5))  # before any step: gain * eta^0
     optimiser.state[net.weight]["rate"] = torch.full_like(net.weight, 0.05)
     optimiser.state[net.weight]["rate"][net.csc_slice, cfg.io :] = torch.arange(7.0)  # the Cf u Cs columns
@@ -54,13 +61,10 @@ def test_zeta_is_the_gain_times_the_mean_rate_of_a_csc_units_weights_from_cf_and
 
 
 def test_the_final_states_step_by_psi_times_zeta_times_their_gradient():
-    cfg = MTRNNConfig(io=2, cf=3, cs=4, tau_io=2, tau_cf=5, tau_cs=16, csc=2)
-    net = MTRNN(cfg, torch.Generator().manual_seed(0))
+    net = _small_net()
+    cfg = net.cfg
     c_t = nn.Parameter(torch.zeros(3, cfg.csc))
-    training = TrainingConfig(optimiser="paper", zeta_gain=4.0)
-    optimiser = make_optimiser(
-        [{"params": list(net.parameters())}, {"params": [c_t], "scale": 1e-3, "context_of": net}], training
-    )
+    optimiser = _paper_rule(net, c_t, zeta_gain=4.0, scale=1e-3)
     optimiser.zero_grad()
     c_t.grad = torch.ones(3, cfg.csc)
     optimiser.step()  # eq. (12): c_T - psi * zeta * dE/dc_T, zeta = 4 * 0.05
