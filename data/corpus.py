@@ -40,7 +40,7 @@ import numpy as np
 from data.camera import Appearance, render_frames
 from data.encode import encode_recording
 from data.motion import Teacher, generate_motion
-from data.nao import JOINT_LIMITS
+from data.nao import JOINT_LIMITS, NAO_ARM
 from data.recording import Recording, add_zip_member, atomic_write
 from data.scenario import VARIANTS, Scene, all_scenes, parse_recording_id, recording_id
 from data.setup import PAPER_SETUP, Setup
@@ -115,6 +115,7 @@ class Corpus:
             vision=[e.vision for e in picked],
             utterances=[e.utterance for e in picked],
             ids=[e.id for e in picked],
+            arm=NAO_ARM.to_dict(),
         )
 
 

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from model.encoding.kinematics import ArmChain
+
 JOINT_NAMES: tuple[str, ...] = ("RShoulderPitch", "RShoulderRoll", "RElbowYaw", "RElbowRoll", "RWristYaw")
 
 # Published NAO V5 ranges of the right-arm joints (radians), one row [min, max] per joint.
@@ -58,6 +60,14 @@ _JOINT_ORIGINS = np.array(
 )
 _JOINT_AXES = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 _HAND_OFFSET = np.array([HAND_OFFSET_X, 0.0, -HAND_OFFSET_Z])
+
+# The same chain as numbers, for readings of the hand's path (`model.encoding.kinematics`).
+NAO_ARM = ArmChain(
+    origins=tuple(tuple(float(x) for x in row) for row in _JOINT_ORIGINS),
+    axes=tuple(tuple(float(x) for x in row) for row in _JOINT_AXES),
+    hand_offset=tuple(float(x) for x in _HAND_OFFSET),
+    limits=tuple(tuple(float(x) for x in row) for row in JOINT_LIMITS),
+)
 
 # A comfortable posture (hand in front, above the table) that IK is gently pulled towards.
 REST_POSTURE: np.ndarray = np.array([0.6, -0.15, 0.9, 0.9, 0.0])

@@ -62,6 +62,8 @@ def visual_config(io: int = 19) -> MTRNNConfig:
     return MTRNNConfig(io=io, cf=40, cs=23, tau_io=2, tau_cf=5, tau_cs=16)
 
 
+PROPRIOCEPTION_READINGS = ("joints", "joints+hand", "hand")
+
 # The learning rules (`model.training.common.make_optimiser`): the paper's adaptive rates times
 # gradients (eqs. 7-10), sign-based RPROP, Adam.
 LEARNING_RULES = ("paper", "rprop", "adam")
@@ -108,6 +110,19 @@ class MultiMTRNNConfig:
     # Named options of the training mode (fields of model.training.end_to_end.EndToEndOptions or
     # model.training.faithful.FaithfulOptions); empty means the mode's defaults (the paper's, for faithful).
     options: dict = field(default_factory=dict)
+    # What MTRNN_s reads (`model.multimtrnn.somatosensory_inputs`, end_to_end's `hand_path`): "joints"
+    # (the paper's joint codes), "joints+hand" (and the hand's path beside them) or "hand" (the
+    # hand's path instead), the path read through `arm` (`model.encoding.kinematics.ArmChain.to_dict()`).
+    proprioception: Literal["joints", "joints+hand", "hand"] = "joints"
+    arm: dict | None = None
+
+    def __post_init__(self) -> None:
+        if self.proprioception not in PROPRIOCEPTION_READINGS:
+            raise ValueError(
+                f"proprioception must be one of {PROPRIOCEPTION_READINGS}, got {self.proprioception!r}"
+            )
+        if self.proprioception != "joints" and self.arm is None:
+            raise ValueError(f"reading {self.proprioception!r} needs the arm's kinematics (`arm`)")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -121,6 +136,8 @@ class MultiMTRNNConfig:
             training=TrainingConfig(**d["training"]),
             generation_steps=int(d.get("generation_steps", 60)),
             options=dict(d.get("options") or {}),
+            proprioception=d.get("proprioception", "joints"),
+            arm=d.get("arm"),
         )
 
 

@@ -22,6 +22,9 @@ class SequenceSet:
     vision: list[np.ndarray]  # each [T_i, F] visual features (19 paper features, +2 centroid optional)
     utterances: list[str]  # what the teacher said, e.g. "slide the red apple."
     ids: list[str]  # recording ids, for reports and plots
+    # The arm the joint codes belong to (`model.encoding.kinematics.ArmChain.to_dict()`), for
+    # readings that need its kinematics (end_to_end's `hand_path`); None if not known.
+    arm: dict | None = None
 
     def __post_init__(self) -> None:
         n = len(self.ids)
@@ -38,4 +41,5 @@ class SequenceSet:
             [self.vision[i] for i in idx],
             [self.utterances[i] for i in idx],
             [self.ids[i] for i in idx],
+            self.arm,
         )

@@ -21,9 +21,31 @@ from torch import Tensor, nn
 
 from model.assemblies import CellAssemblies, WordAssemblies
 from model.config import MultiMTRNNConfig
+from model.encoding.kinematics import ArmChain, read_hand_path
 from model.encoding.utterance import Lexicon, decode_text
 from model.encoding.words import align
 from model.mtrnn import MTRNN
+
+
+def somatosensory_inputs(
+    proprioception: Sequence[np.ndarray] | Tensor, config: MultiMTRNNConfig, lengths: Tensor | None = None
+) -> tuple[Tensor, Tensor]:
+    """What MTRNN_s reads, padded [B, T, io], and the lengths [B], from the joint codes (4.1.1) of a
+    list of [T_i, 5] arrays or a padded [B, T, 5] tensor with lengths: by `config.proprioception`
+    the codes themselves (the paper), the codes and the hand's path read through `config.arm`
+    (`model.encoding.kinematics`), or the hand's path alone."""
+    arm = None if config.proprioception == "joints" else ArmChain.from_dict(config.arm or {})
+    joints = config.somatosensory.io if arm is None else arm.joints
+    if isinstance(proprioception, Tensor) and proprioception.ndim == 3:
+        if lengths is None:
+            lengths = torch.full((proprioception.shape[0],), proprioception.shape[1])
+        p = proprioception[..., :joints]
+    else:
+        p, lengths = pad_sequences(proprioception, joints)
+    if arm is None:
+        return p, lengths
+    read = read_hand_path(p, arm)
+    return (read if config.proprioception == "joints+hand" else read[..., joints:]), lengths
 
 
 @dataclass
@@ -189,7 +211,7 @@ class MultiMTRNN(nn.Module):
     ) -> tuple[Tensor, Tensor]:
         """(c_s,T, c_v,T) [B, csc] from lists of [T_i, F] arrays, or padded [B, T, F] tensors with
         lengths. Vision keeps its first `config.visual.io` columns (19 paper features)."""
-        p, p_len = self._batch(proprioception, proprioception_lengths, self.config.somatosensory.io)
+        p, p_len = somatosensory_inputs(proprioception, self.config, proprioception_lengths)
         v, v_len = self._batch(vision, vision_lengths, self.config.visual.io)
         return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
 
@@ -252,7 +274,7 @@ class MultiMTRNN(nn.Module):
                 f"proprioception has {len(proprioception)} steps and vision {len(vision)}: "
                 "a timeline needs both on one time grid"
             )
-        p, p_len = pad_sequences([proprioception], self.config.somatosensory.io)
+        p, p_len = somatosensory_inputs([proprioception], self.config)
         v, v_len = pad_sequences([vision], self.config.visual.io)
         _, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         _, v_states = self.visual.abstract(v, v_len, return_states=True)
@@ -287,7 +309,7 @@ class MultiMTRNN(nn.Module):
         self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon
     ) -> ActivityTrace:
         """Every layer's activity over time in all three nets for one scene."""
-        p, p_len = pad_sequences([proprioception], self.config.somatosensory.io)
+        p, p_len = somatosensory_inputs([proprioception], self.config)
         v, v_len = pad_sequences([vision], self.config.visual.io)
         c_s, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         c_v, v_states = self.visual.abstract(v, v_len, return_states=True)

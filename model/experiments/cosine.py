@@ -152,7 +152,8 @@ def train_cosine_runs(
     its single run) are stacked and run as one vectorised pass (`torch.func.vmap`), and a run that
     has converged stops learning (zero gradients leave its weights and rates unchanged). The same
     computation as one run at a time but for float rounding (which grows over thousands of epochs,
-    so runs agree in distribution, not digit for digit), an order of magnitude faster. No snapshots.
+    so runs agree in distribution, not digit for digit), an order of magnitude faster. Each run's
+    one snapshot is its final state.
 
     `psi` is one value or one per run; under the paper's rule `zeta_gains` (one per run, default
     the setup's) lets one pass calibrate eq. (10)'s constant: run r's c_T steps by
@@ -216,7 +217,7 @@ def train_cosine_runs(
             d_rel(final[r]),
             d_avg(ends[r]),
             d_rel(ends[r]),
-            [],
+            [{"epoch": int(epochs[r]), "csc": final[r].tolist(), "targets": ends[r].tolist()}],
         )
         for r in range(len(seeds))
     ]

@@ -9,8 +9,10 @@ on an engine:
 - ``ray``: each run is a Ray task (``num_cpus=1``); ``ray.init()`` starts a local instance with
   ``num_cpus`` CPUs when no address is given, otherwise it joins the cluster at ``address``.
 
-Both engines call the same worker function, `execute_run`, in a fresh-seeded process with one
-torch thread, so the same seeds give the same numbers on either engine. Workers return metrics
+Both engines call the same worker function, `execute_task`, in a fresh-seeded process with one
+torch thread, so the same seeds give the same numbers on either engine. A task is one run, or, for
+a runner that trains several runs in one vectorised pass (a `batch_size` attribute, e.g. the cosine
+experiment's), up to `batch_size` runs. Workers return metrics
 and checkpoint bytes; only the driver writes the run store, one transaction per finished run, so
 a killed evaluation restarted with the same command loses nothing and repeats no finished run.
 """
@@ -198,6 +200,44 @@ def execute_run(data: Any, spec: RunSpec, runner: str = DEFAULT_RUNNER) -> RunOu
         )
 
 
+def execute_batch(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutcome]:
+    """Train `specs` together with a batched runner: runner(data, specs) -> one result per spec, in
+    order; each run is charged an equal share of the batch's time. Never raises."""
+    import torch
+
+    torch.set_num_threads(1)
+    started = time.perf_counter()
+    try:
+        results = resolve(runner)(data, specs)
+    except Exception:  # the whole batch is recorded as failed and retried on restart
+        error = traceback.format_exc()
+        seconds = (time.perf_counter() - started) / len(specs)
+        return [RunOutcome(key=s.key, ok=False, seconds=seconds, error=error) for s in specs]
+    return [
+        RunOutcome(
+            key=s.key,
+            ok=True,
+            metrics=_flat_metrics(r.metrics),
+            seconds=float(r.seconds),
+            artifacts=dict(r.artifacts or {}),
+        )
+        for s, r in zip(specs, results, strict=True)
+    ]
+
+
+def execute_task(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutcome]:
+    """One engine task: a batch for a batched runner, otherwise its one run."""
+    if getattr(resolve(runner), "batch_size", None):
+        return execute_batch(data, specs, runner)
+    return [execute_run(data, spec, runner) for spec in specs]
+
+
+def tasks(specs: list[RunSpec], runner: str) -> list[list[RunSpec]]:
+    """`specs` cut into engine tasks: chunks of the runner's `batch_size` (1 if it has none)."""
+    size = getattr(resolve(runner), "batch_size", None) or 1
+    return [specs[i : i + size] for i in range(0, len(specs), size)]
+
+
 _WORKER_DATA: Any = None
 
 
@@ -217,8 +257,8 @@ def _init_worker(data: Any) -> None:
     _WORKER_DATA = data
 
 
-def _pool_task(spec: RunSpec, runner: str) -> RunOutcome:
-    return execute_run(_WORKER_DATA, spec, runner)
+def _pool_task(specs: list[RunSpec], runner: str) -> list[RunOutcome]:
+    return execute_task(_WORKER_DATA, specs, runner)
 
 
 # --- engines ------------------------------------------------------------------------------------
@@ -230,12 +270,12 @@ def _local_outcomes(data: Any, specs: list[RunSpec], runner: str, workers: int) 
     with ProcessPoolExecutor(
         max_workers=workers, mp_context=ctx, initializer=_init_worker, initargs=(data,)
     ) as pool:
-        pending: set[Future] = {pool.submit(_pool_task, s, runner) for s in specs}
+        pending: set[Future] = {pool.submit(_pool_task, t, runner) for t in tasks(specs, runner)}
         try:
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for f in finished:
-                    yield f.result()
+                    yield from f.result()
         finally:
             for f in pending:
                 f.cancel()
@@ -260,14 +300,14 @@ def _ray_outcomes(
     import ray
 
     ray_init(address, num_cpus)
-    task = ray.remote(num_cpus=1, max_retries=1)(execute_run)
+    task = ray.remote(num_cpus=1, max_retries=1)(execute_task)
     data_ref = ray.put(data)
-    pending = [task.remote(data_ref, s, runner) for s in specs]
+    pending = [task.remote(data_ref, t, runner) for t in tasks(specs, runner)]
     try:
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             for ref in done:
-                yield ray.get(ref)
+                yield from ray.get(ref)
     finally:
         for ref in pending:
             ray.cancel(ref, force=True)
@@ -285,7 +325,7 @@ def outcomes(
     if not specs:
         return iter(())
     if engine == "local":
-        return _local_outcomes(data, specs, runner, max(1, min(workers, len(specs))))
+        return _local_outcomes(data, specs, runner, max(1, min(workers, len(tasks(specs, runner)))))
     if engine == "ray":
         return _ray_outcomes(data, specs, runner, address, workers)
     raise ValueError(f"unknown engine {engine!r}; use 'local' or 'ray'")

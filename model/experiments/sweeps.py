@@ -6,8 +6,9 @@ experiment ("psi_s") so that every value shares the same folds and seeds; its ta
 value, the mixed F1 and edit distance (Fig. 9 a, b), d_avg / d_rel (c) and d_inter / d_intra (d)
 of the somatosensory Csc, each as mean and standard error over runs.
 
-The cosine sweep runs `model.experiments.cosine.run_cosine` once per (psi, run) as an engine task, so it
-spreads over cores and Ray workers the same way; its table gives epochs, d_avg and d_rel (Fig. 3).
+The cosine sweep stores one run per (psi, seed) and trains them in vectorised batches of
+`cosine_runs.batch_size` runs, each batch an engine task, so it spreads over cores and Ray workers
+the same way; its table gives epochs, d_avg and d_rel (Fig. 3).
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from model.experiments.protocol import apply_overrides, plan
@@ -24,7 +24,7 @@ from model.metrics import mean_sem
 
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
 PSI_COSINE_PAPER = (0.0, 1e-5, 5e-5, 2e-4)  # Fig. 3 (c-f)
-COSINE_RUNNER = "model.experiments.sweeps:cosine_run"
+COSINE_RUNNER = "model.experiments.sweeps:cosine_runs"
 CSC_SPACE_SWEPT = "somatosensory"  # Fig. 9 (c, d) measure the somatosensory Csc
 
 
@@ -61,37 +61,50 @@ class CosineRunResult:
     artifacts: dict[str, Any] = field(default_factory=dict)
 
 
-def cosine_run(
-    data: Any,
-    mode: str,
-    fold: int,
-    seed: int,
-    config: Mapping[str, Any] | None = None,
-    out_dir: Path | None = None,
-) -> CosineRunResult:
-    """Engine runner for one run of the cosine experiment (3.2.2): `config["psi"]` is its psi, the
-    optional "optimiser", "zeta_gain" and "max_epochs" fields of its `CosineSetup` (the engine's
-    runner signature carries everything; the experiment needs no data)."""
-    from model.experiments.cosine import CosineSetup, train_cosine_once
+def cosine_runs(data: Any, specs: Sequence[RunSpec]) -> list[CosineRunResult]:
+    """Batched engine runner for the cosine experiment (3.2.2): the runs of `specs` learn together
+    (`train_cosine_runs`), each with its `config["psi"]` and the optional "optimiser", "zeta_gain"
+    and "max_epochs" of its `CosineSetup`; runs that need another setup (or, under a rule without
+    per-run steps, another psi) form their own pass. The experiment needs no data."""
+    from model.experiments.cosine import CosineSetup, train_cosine_runs
 
-    started = time.perf_counter()
-    config = dict(config or {})
-    setup = CosineSetup(**{k: config[k] for k in ("optimiser", "zeta_gain", "max_epochs") if k in config})
-    run = train_cosine_once(float(config["psi"]), seed, setup)
-    return CosineRunResult(
-        metrics={
-            "cosine": {
-                "epochs": float(run.epochs),
-                "converged": float(run.converged),
-                "d_avg": run.d_avg,
-                "d_rel": run.d_rel,
-                "target_d_avg": run.target_d_avg,
-                "target_d_rel": run.target_d_rel,
-            }
-        },
-        seconds=time.perf_counter() - started,
-        artifacts={"csc": run.snapshots[-1]["csc"] if run.snapshots else []},
-    )
+    passes: dict[tuple, list[int]] = {}
+    for i, spec in enumerate(specs):
+        setup = CosineSetup(**{k: spec.config[k] for k in ("optimiser", "max_epochs") if k in spec.config})
+        psi = None if setup.optimiser == "paper" else spec.config["psi"]
+        passes.setdefault((setup.optimiser, setup.max_epochs, psi), []).append(i)
+    results: list[CosineRunResult | None] = [None] * len(specs)
+    for (optimiser, max_epochs, _), members in passes.items():
+        setup = CosineSetup(optimiser=optimiser, max_epochs=max_epochs)
+        started = time.perf_counter()
+        runs = train_cosine_runs(
+            [float(specs[i].config["psi"]) for i in members],
+            [specs[i].seed for i in members],
+            setup,
+            [float(specs[i].config.get("zeta_gain", setup.zeta_gain)) for i in members]
+            if optimiser == "paper"
+            else None,
+        )
+        share = (time.perf_counter() - started) / len(members)
+        for i, run in zip(members, runs, strict=True):
+            results[i] = CosineRunResult(
+                metrics={
+                    "cosine": {
+                        "epochs": float(run.epochs),
+                        "converged": float(run.converged),
+                        "d_avg": run.d_avg,
+                        "d_rel": run.d_rel,
+                        "target_d_avg": run.target_d_avg,
+                        "target_d_rel": run.target_d_rel,
+                    }
+                },
+                seconds=share,
+                artifacts={"csc": run.snapshots[-1]["csc"]},
+            )
+    return [r for r in results if r is not None]
+
+
+cosine_runs.batch_size = 25  # runs per vectorised pass: 400 runs are 16 engine tasks
 
 
 def cosine_specs(

@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from model.config import LEARNING_RULES, MultiMTRNNConfig, mode_options
+from model.config import LEARNING_RULES, PROPRIOCEPTION_READINGS, MultiMTRNNConfig, mode_options
 from model.experiments.protocol import apply_overrides, default_config
 from model.experiments.splits import SPLITS, SQUARE_FOLDS
 from model.training.end_to_end.options import EndToEndOptions
@@ -130,6 +130,7 @@ RANGES: dict[str, Range] = {
     "time_warp": _floats(0, 0.9),
     **dict.fromkeys(("recombine", "recombine_objects"), _floats(0, 100)),
     "recombine_pairs": _ints(0, 16),
+    "hand_path": Range(str, choices=PROPRIOCEPTION_READINGS),
     **dict.fromkeys(("auditory_epochs", "perception_epochs"), EPOCHS),
     **dict.fromkeys(("auditory_check_every", "joint_epochs"), _ints(0, MAX_EPOCHS)),
     "auditory_attempts": _ints(1, 10),

@@ -49,7 +49,10 @@ Training, top to bottom (`train_end_to_end`):
    For colour x shape pairs never seen (issue 16, `factors.py`): `recombine_objects` adds the word
    loss of recoloured recordings (the colour columns of another recording of another colour, its
    colour word with them), and `factorised_vision` cuts MTRNN_v into a colour and a shape pathway
-   whose Csc only the colour and the shape slot's word units read.
+   whose Csc only the colour and the shape slot's word units read. For recordings made elsewhere
+   (issue 12): `hand_path` lets MTRNN_s read the hand's path in the torso frame (forward kinematics
+   of the recordings' arm, `model.encoding.kinematics`) beside or instead of the joint codes; the
+   path does not depend on which of the redundant arm's joint configurations reached it.
 3. Joint stage (`joint_epochs`): perception -> CAs -> MTRNN_a, everything through the auditory
    loss (plus the word loss when on). With `word_loss` off this is the only stage: the plain
    2020-style end-to-end training that the options are measured against.
@@ -65,6 +68,7 @@ import torch
 from model.assemblies import WordAssemblies
 from model.config import MultiMTRNNConfig
 from model.data import SequenceSet
+from model.encoding.kinematics import HAND_PATH_COLUMNS, ArmChain
 from model.multimtrnn import MultiMTRNN
 from model.training.common import (
     MultiMTRNNMode,
@@ -109,6 +113,16 @@ def word_assemblies(
     )
 
 
+def read_hand_path(config: MultiMTRNNConfig, data: SequenceSet, reading: str) -> None:
+    """Let MTRNN_s read the hand's path (`hand_path`) through the arm the recordings came from."""
+    if data.arm is None:
+        raise ValueError("hand_path needs the arm the joint angles belong to (SequenceSet.arm)")
+    arm = ArmChain.from_dict(data.arm)
+    io = (arm.joints if reading == "joints+hand" else 0) + HAND_PATH_COLUMNS
+    config.somatosensory = replace(config.somatosensory, io=io)
+    config.proprioception, config.arm = reading, data.arm
+
+
 def object_factors(data: SequenceSet, slots: WordSlots, options: EndToEndOptions) -> dict:
     """Which heard slots the colour and the shape columns tell, when an option needs them."""
     if options.recombine_objects <= 0 and not options.factorised_vision:
@@ -128,6 +142,8 @@ def _train(
 ) -> TrainedModel:
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
+    if options.hand_path != "joints":
+        read_hand_path(config, data, options.hand_path)
     slots = WordSlots.from_utterances(data.utterances)
     factors = object_factors(data, slots, options)
     assemblies = word_assemblies(config, slots, options, seed, factors)

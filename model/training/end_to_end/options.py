@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from model.config import PROPRIOCEPTION_READINGS
+
 
 @dataclass
 class EndToEndOptions:
@@ -17,6 +19,9 @@ class EndToEndOptions:
     modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
+    # MTRNN_s reads the joint codes ("joints", the paper's), the hand's path in the torso frame beside
+    # them ("joints+hand") or instead ("hand"), by the arm's forward kinematics (issue 12)
+    hand_path: str = "joints"
     normalise_inputs: bool = True  # standardise encoder inputs while training (`InputNormaliser`)
     selection_scenes: int = 0  # training scenes held out to calibrate and select perception
     select_every: int = 10  # epochs between two selections
@@ -36,6 +41,8 @@ class EndToEndOptions:
     joint_epochs: int = 0  # stage 3
 
     def __post_init__(self) -> None:
+        if self.hand_path not in PROPRIOCEPTION_READINGS:
+            raise ValueError(f"hand_path must be one of {PROPRIOCEPTION_READINGS}, got {self.hand_path!r}")
         if self.average_from > 0 and self.selection_scenes > 0:
             raise ValueError("average_from needs selection_scenes = 0 (the average is the final state)")
         if self.recombine > 0 and not self.slot_softmax:

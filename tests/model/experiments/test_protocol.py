@@ -10,6 +10,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,7 @@ from model.experiments.protocol import (
     run_protocol,
     run_seed,
     summarise,
+    tasks,
 )
 from model.experiments.runstore import RunStore
 from tests.model.tiny_data import TINY_OVERRIDES, tiny_sequence_set
@@ -215,3 +217,30 @@ def test_ray_runs_the_objects_split_as_the_local_pool_does(tmp_path) -> None:
     assert not local.failed and not remote.failed
     assert [(r.split, r.metrics) for r in remote.runs] == [(r.split, r.metrics) for r in local.runs]
     assert remote.runs[0].metrics["test"]["n"] == 4
+
+
+@dataclass
+class _Result:
+    metrics: dict
+    seconds: float
+    artifacts: dict
+
+
+def batched_echo(data, specs):
+    """A batched runner for the test below: every run scores its own seed and the batch's size."""
+    return [_Result({"train": {"seed": s.seed, "batch": len(specs)}}, 1.0, {}) for s in specs]
+
+
+batched_echo.batch_size = 3
+
+
+def test_a_batched_runner_gets_its_runs_in_batches_and_the_store_one_record_each(tmp_path) -> None:
+    specs = [replace(s, seed=10 + i) for i, s in enumerate(plan("echo", "echo", 7, 1, {}, "d"))]
+    assert [len(t) for t in tasks(specs, f"{__name__}:batched_echo")] == [3, 3, 1]
+    store = RunStore(tmp_path / "runs")
+    result = run_protocol(None, specs, store, "local", workers=2, runner=f"{__name__}:batched_echo")
+    assert not result.failed and result.executed == 7
+    assert [r.metrics["train"]["seed"] for r in result.runs] == [s.seed for s in specs]
+    assert sorted(r.metrics["train"]["batch"] for r in result.runs) == [1, 3, 3, 3, 3, 3, 3]
+    again = run_protocol(None, specs, store, "local", workers=2, runner=f"{__name__}:batched_echo")
+    assert again.executed == 0 and again.skipped == 7

@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 
 from model.config import ZETA_GAIN
+from model.experiments.cosine import CosineSetup, train_cosine_runs
 from model.experiments.protocol import default_config
 from model.experiments.runstore import RunRecord
 from model.experiments.sweeps import (
     COSINE_RUNNER,
-    cosine_run,
+    cosine_runs,
     cosine_specs,
     cosine_table,
     psi_s_specs,
@@ -32,17 +34,23 @@ def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None
 
 
 @pytest.mark.slow
-def test_cosine_runs_share_seeds_across_psi_and_carry_psi_to_the_runner() -> None:
+def test_cosine_runs_share_seeds_across_psi_and_learn_in_batches() -> None:
     specs = cosine_specs([0.0, 5e-5], runs=3)
     assert [s.seed for s in specs[:3]] == [s.seed for s in specs[3:]] == [0, 1, 2]
-    assert COSINE_RUNNER == "model.experiments.sweeps:cosine_run"
+    assert COSINE_RUNNER == "model.experiments.sweeps:cosine_runs"
     assert specs[3].config == {"psi": 5e-5, "optimiser": "paper", "zeta_gain": ZETA_GAIN}
-    result = cosine_run(
-        None, specs[3].mode, specs[3].fold, specs[3].seed, specs[3].config | {"max_epochs": 50}
-    )
-    m = result.metrics["cosine"]
-    assert 0 < m["epochs"] <= 50 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0
-    assert len(result.artifacts["csc"]) == 4  # four phase-shifted sequences (3.2.2)
+    short = [replace(s, config=s.config | {"max_epochs": 50}) for s in specs]
+    short[0] = replace(short[0], config=short[0].config | {"optimiser": "rprop"})  # a pass of its own
+    results = cosine_runs(None, short)
+    assert len(results) == 6
+    for result in results:
+        m = result.metrics["cosine"]
+        assert 0 < m["epochs"] <= 50 and 0 < m["d_rel"] <= 1 and m["d_avg"] > 0 and result.seconds > 0
+        assert len(result.artifacts["csc"]) == 4  # four phase-shifted sequences (3.2.2)
+    # each result is its own spec's run: the same as that run learning alone
+    alone = train_cosine_runs(5e-5, [1], CosineSetup(max_epochs=50))[0]
+    assert results[4].metrics["cosine"]["d_rel"] == pytest.approx(alone.d_rel, abs=1e-5)
+    assert results[4].metrics["cosine"]["epochs"] == alone.epochs
 
 
 def _run(psi: float, fold: int, f1_train: float, f1_test: float, d_inter: float) -> RunRecord:

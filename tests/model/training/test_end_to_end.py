@@ -280,3 +280,31 @@ def test_plain_end_to_end_trains_everything_through_the_auditory_loss() -> None:
     for net in ("somatosensory", "visual", "auditory"):
         assert not torch.equal(getattr(model, net).weight, getattr(initial, net).weight), net
     assert not torch.equal(model.assemblies.projection, initial.assemblies.projection)
+
+
+@pytest.mark.parametrize("reading, io", [("joints+hand", 11), ("hand", 6)])
+def test_hand_path_reads_the_arm_the_recordings_came_from_and_checkpoints_it(tmp_path, reading, io) -> None:
+    from data.nao import NAO_ARM
+
+    data = replace(tiny_corpus(variants=1), arm=NAO_ARM.to_dict())
+    options = replace(_tiny_options(), hand_path=reading, selection_scenes=0)
+    trained = train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
+    config = trained.model.config
+    assert (config.somatosensory.io, config.proprioception, config.arm) == (io, reading, NAO_ARM.to_dict())
+    before = trained.model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
+    checkpoint.save(trained.model, tmp_path / "m", trained.meta)
+    model, _ = checkpoint.load(tmp_path / "m")
+    assert model.config.proprioception == reading
+    after = model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
+    for b, a in zip(before, after, strict=True):
+        np.testing.assert_array_equal(b.activity, a.activity)
+        np.testing.assert_array_equal(b.csc_s, a.csc_s)
+
+
+def test_hand_path_needs_the_arm_of_the_recordings() -> None:
+    data = tiny_corpus(variants=1)  # no arm: nothing to read the hand's path through
+    options = replace(_tiny_options(), hand_path="joints+hand", selection_scenes=0)
+    with pytest.raises(ValueError, match="arm"):
+        train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
+    with pytest.raises(ValueError, match="hand_path must be"):
+        EndToEndOptions(hand_path="elbow")
