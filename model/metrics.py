@@ -141,6 +141,25 @@ def mean_sem(values: Iterable[float | None]) -> tuple[float, float, int]:
     return float(a.mean()), sem, int(a.size)
 
 
+def paired_difference(
+    after: Sequence[float | None], before: Sequence[float | None]
+) -> tuple[float, float, int, float]:
+    """Mean and standard error of after - before over the pairs where both are finite (runs with
+    the same seed: a paired design), their number, and the two-sided p of the paired t-test (nan
+    below two pairs or when every difference is the same)."""
+    from scipy.stats import ttest_rel
+
+    pairs = [
+        (a, b)
+        for a, b in zip(after, before, strict=True)
+        if a is not None and b is not None and math.isfinite(a) and math.isfinite(b)
+    ]
+    mean, sem, n = mean_sem([a - b for a, b in pairs])
+    if n < 2 or sem == 0:
+        return mean, sem, n, math.nan
+    return mean, sem, n, float(ttest_rel([a for a, _ in pairs], [b for _, b in pairs]).pvalue)
+
+
 def mixed(train: float, test: float) -> float:
     """The paper's "mixed" measure (4.3, Fig. 9): training and test results with equal weight."""
     return (train + test) / 2.0

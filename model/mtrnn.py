@@ -166,28 +166,18 @@ class MTRNN(nn.Module):
         return (activity, torch.stack(states, dim=1)) if return_states else activity
 
 
-def kl_divergence(target: Tensor, output: Tensor, eps: float = 1e-8, reduction: str = "mean") -> Tensor:
+def kl_divergence(target: Tensor, output: Tensor, eps: float = 1e-8) -> Tensor:
     """KLD between desired and produced softmax activity (3.1.3), summed over units and steps t >= 1
-    and averaged ("mean") or summed ("sum", the paper's accumulated error) over sequences. Step 0 is
-    the fixed initial state and carries no error."""
+    (eqs. 7-8 accumulate the error over the sequence) and averaged over sequences (summed, MTRNN_a
+    diverges at its first step: docs/experiments/faithful.md). Step 0 is the fixed initial state
+    and carries no error."""
     t, o = target[:, 1:], output[:, 1:]
-    per_sequence = (t * (torch.log(t + eps) - torch.log(o + eps))).sum(dim=(1, 2))
-    return reduce(per_sequence, reduction)
+    return (t * (torch.log(t + eps) - torch.log(o + eps))).sum(dim=(1, 2)).mean()
 
 
-def reduce(per_sequence: Tensor, reduction: str) -> Tensor:
-    """Errors of a batch [B] combined: "mean" or "sum" over sequences."""
-    if reduction == "sum":
-        return per_sequence.sum()
-    if reduction == "mean":
-        return per_sequence.mean()
-    raise ValueError(f"unknown reduction {reduction!r} (mean or sum)")
-
-
-def context_abstraction_loss(
-    net: MTRNN, c_t_produced: Tensor, c_t_target: Tensor, psi: float, reduction: str = "mean"
-) -> Tensor:
-    """LMS on the final Csc states with self-organisation forcing (eqs. 11-12).
+def context_abstraction_loss(net: MTRNN, c_t_produced: Tensor, c_t_target: Tensor, psi: float) -> Tensor:
+    """LMS on the final Csc states with self-organisation forcing (eqs. 11-12), averaged over
+    sequences as `kl_divergence`.
 
     eq. (11): the weights learn from (1 - psi) of the error between y_T = f(z_T) and f(c_T + b).
     eq. (12): the targets c_T move along the same error, descending it (towards the network's
@@ -198,4 +188,4 @@ def context_abstraction_loss(
     produced = scaled_logistic(c_t_produced)
     weights_part = 0.5 * ((produced - scaled_logistic(c_t_target.detach() + bias)) ** 2).sum(dim=1)
     targets_part = 0.5 * ((produced.detach() - scaled_logistic(c_t_target + bias)) ** 2).sum(dim=1)
-    return reduce((1.0 - psi) * weights_part + targets_part, reduction)
+    return ((1.0 - psi) * weights_part + targets_part).mean()

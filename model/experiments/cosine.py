@@ -26,7 +26,7 @@ from torch import Tensor, nn
 from model.config import ZETA_GAIN, MTRNNConfig, TrainingConfig
 from model.metrics import d_avg, d_rel, mean_sem
 from model.mtrnn import MTRNN, context_abstraction_loss, scaled_logistic
-from model.training.common import make_optimiser, reduction_of
+from model.training.common import make_optimiser
 
 STEPS = 33
 PHASES = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
@@ -113,7 +113,7 @@ def train_cosine_once(
         if error < setup.threshold:
             converged = True
             break
-        context_abstraction_loss(net, produced, c_t, psi, reduction_of(training)).backward()
+        context_abstraction_loss(net, produced, c_t, psi).backward()
         optimiser.step()
         epoch += 1
     with torch.no_grad():

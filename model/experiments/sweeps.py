@@ -20,7 +20,7 @@ from typing import Any
 
 from model.experiments.protocol import apply_overrides, plan
 from model.experiments.runstore import RunRecord, RunSpec
-from model.metrics import mean_sem
+from model.metrics import mean_sem, paired_difference
 
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
 PSI_COSINE_PAPER = (0.0, 1e-5, 5e-5, 2e-4)  # Fig. 3 (c-f)
@@ -175,17 +175,33 @@ def cosine_rule(run: RunRecord) -> tuple[str, float]:
 
 def cosine_table(runs: Sequence[RunRecord], rule: tuple[str, float] | None = None) -> list[dict[str, Any]]:
     """Per psi: mean and standard error over runs of epochs, d_avg and d_rel (Fig. 3 a, b), of the
-    runs learned with `rule` (optimiser, zeta_gain; default the cosine setup's)."""
+    runs learned with `rule` (optimiser, zeta_gain; default the cosine setup's), their seconds, and
+    for psi > 0 the paired difference of d_avg and d_rel to psi = 0 on the same seeds (mean,
+    standard error, p of the paired t-test: "d_rel_vs_0", "d_rel_vs_0_sem", "d_rel_vs_0_p")."""
     from model.experiments.cosine import CosineSetup
 
     rule = rule or (CosineSetup.optimiser, CosineSetup.zeta_gain)
     runs = [r for r in runs if cosine_rule(r) == rule]
+    groups = _by_value(runs, "psi")
+    baseline = {r.seed: r for r in dict(groups).get(0.0, [])}
     rows = []
-    for value, group in _by_value(runs, "psi"):
-        row: dict[str, Any] = {"psi": value, "runs": len(group)}
+    for value, group in groups:
+        row: dict[str, Any] = {
+            "psi": value,
+            "runs": len(group),
+            "seconds": sum(r.seconds or 0.0 for r in group),
+        }
         for name in ("epochs", "converged", "d_avg", "d_rel", "target_d_avg", "target_d_rel"):
             mean, sem, n = mean_sem([_metric(r, "cosine", name) for r in group])
             if n:
                 row[name], row[f"{name}_sem"] = mean, sem
+        paired = [r for r in group if r.seed in baseline]
+        if value != 0.0 and paired:  # the same seeds without forcing: differences and a paired t-test
+            for name in ("d_avg", "d_rel"):
+                diff, sem, n, p = paired_difference(
+                    [_metric(r, "cosine", name) for r in paired],
+                    [_metric(baseline[r.seed], "cosine", name) for r in paired],
+                )
+                row[f"{name}_vs_0"], row[f"{name}_vs_0_sem"], row[f"{name}_vs_0_p"] = diff, sem, p
         rows.append(row)
     return rows

@@ -207,13 +207,6 @@ def rule_of(training: TrainingConfig) -> str:
     return rule
 
 
-def reduction_of(training: TrainingConfig) -> str:
-    """How a batch's errors combine: summed over sequences under the paper's rule (eqs. 7-8
-    accumulate the error of the whole training set; with rates times gradients the sum is not a
-    mere scale), averaged otherwise."""
-    return "mean"
-
-
 def uniform(shape: tuple[int, ...], scale: float, generator: torch.Generator) -> Tensor:
     """Initial values uniform in [-scale, scale]."""
     return (torch.rand(*shape, generator=generator) * 2 - 1) * scale

@@ -13,9 +13,10 @@ paper leaves open are in docs/experiments/faithful.md:
    c_T are only what the encoders were pulled towards) to the learned c_a,0 of its utterance, by
    the same rule.
 
-Under the paper's rule the errors of all training sequences are summed (eqs. 7-8 accumulate them);
-`TrainingConfig.optimiser` = "rprop" (sign-based RPROP) or "adam" are named alternatives, and
-`FaithfulOptions` names the other departures from that reading (all off by default).
+Every stage sums its error over the time steps of a sequence (eqs. 7-8) and averages it over the
+sequences (summed, MTRNN_a diverges: docs/experiments/faithful.md). `TrainingConfig.optimiser` =
+"rprop" (sign-based RPROP) or "adam" are named alternatives, and `FaithfulOptions` names the other
+departures from that reading (all off by default).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from torch import Tensor, nn
 
 from model.config import MultiMTRNNConfig, TrainingConfig
 from model.data import SequenceSet
-from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, reduce, scaled_logistic
+from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
 from model.multimtrnn import MultiMTRNN
 from model.training.common import (
     Batch,
@@ -42,7 +43,6 @@ from model.training.common import (
     encode_utterances,
     make_batch,
     make_optimiser,
-    reduction_of,
     uniform,
 )
 
@@ -68,7 +68,7 @@ def train_auditory(
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
         output = net.generate(c0, targets.shape[1], teacher=targets, alpha=training.alpha)
-        loss = kl_divergence(targets, output, reduction=reduction_of(training))
+        loss = kl_divergence(targets, output)
         loss.backward()
         optimiser.step()
         report("auditory", epoch, epochs, loss.item(), c0 if report_rows is None else c0[report_rows])
@@ -102,19 +102,18 @@ def train_encoder(
         optimiser.zero_grad()
         targets = c_t if groups is None else c_t[groups]
         produced = net.abstract(inputs, lengths)
-        loss = context_abstraction_loss(net, produced, targets, psi, reduction_of(training))
+        loss = context_abstraction_loss(net, produced, targets, psi)
         loss.backward()
         optimiser.step()
         report(stage, epoch, epochs, loss.item(), targets)
     return c_t
 
 
-def assemblies_loss(
-    assemblies: nn.Module, c_s: Tensor, c_v: Tensor, c_a0: Tensor, reduction: str = "mean"
-) -> Tensor:
-    """LMS between y = f(z) and f(c_a,0) (eq. 16), z = the assemblies' output (eq. 17)."""
+def assemblies_loss(assemblies: nn.Module, c_s: Tensor, c_v: Tensor, c_a0: Tensor) -> Tensor:
+    """LMS between y = f(z) and f(c_a,0) (eq. 16), z = the assemblies' output (eq. 17), averaged
+    over recordings."""
     y = scaled_logistic(assemblies(c_s, c_v))
-    return reduce(0.5 * ((y - scaled_logistic(c_a0)) ** 2).sum(dim=1), reduction)
+    return (0.5 * ((y - scaled_logistic(c_a0)) ** 2).sum(dim=1)).mean()
 
 
 def fit_assemblies(
@@ -132,7 +131,7 @@ def fit_assemblies(
     epochs = training.epochs_assemblies if epochs is None else epochs
     for epoch in range(1, epochs + 1):
         optimiser.zero_grad()
-        loss = assemblies_loss(assemblies, c_s, c_v, c_a0, reduction_of(training))
+        loss = assemblies_loss(assemblies, c_s, c_v, c_a0)
         loss.backward()
         optimiser.step()
         report("assemblies", epoch, epochs, loss.item())

@@ -220,19 +220,25 @@ def cosine(page: Page, store: RunStore) -> None:
     page.report.data["cosine_examples"] = {f"{k:g}": v for k, v in examples.items()}
     path = page.figure("fig3_cosine.png")
     figures.figure_cosine(table, examples, path)
+    runs_per_psi = "/".join(sorted({str(r["runs"]) for r in table}))
     page.md += [
         "## Contrary cosines (Fig. 3)",
         "",
-        f"{len(cos_runs) // max(1, len(table))} runs per psi (paper: 100), identical seeds for every psi.",
+        f"{runs_per_psi} runs per psi (paper: 100), identical seeds for every psi, the paper's learning "
+        "rule (eqs. 7-12) with eq. (10)'s constant calibrated on this figure (docs/experiments/faithful.md). "
+        "The last two columns compare each psi with psi = 0 on the same seeds: mean difference +- standard "
+        "error and the paired t-test's p.",
         "",
-        "| psi | epochs | converged | d_avg | d_rel |",
-        "| --- | --- | --- | --- | --- |",
+        "| psi | epochs | converged | d_avg | d_rel | d_rel - d_rel(psi 0), p | d_avg - d_avg(psi 0), p "
+        "| wall time |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for r in table:
         page.md.append(
             f"| {r['psi']:g} | {fmt(r.get('epochs'), r.get('epochs_sem'), 0)} | "
             f"{fmt(r.get('converged'), None, 2)} | {fmt(r.get('d_avg'), r.get('d_avg_sem'))} | "
-            f"{fmt(r.get('d_rel'), r.get('d_rel_sem'))} |"
+            f"{fmt(r.get('d_rel'), r.get('d_rel_sem'))} | {_versus_zero(r, 'd_rel')} | "
+            f"{_versus_zero(r, 'd_avg')} | {r['seconds'] / 60:.0f} min |"
         )
     best = max(table, key=lambda r: r.get("d_rel", -1))
     page.md += [
@@ -243,6 +249,14 @@ def cosine(page: Page, store: RunStore) -> None:
         + prose.cosine_sentence(table),
         "",
     ]
+
+
+def _versus_zero(row: dict, name: str) -> str:
+    """ "+0.013 +- 0.004, p = 0.002" for a cosine table row, "-" for psi = 0."""
+    if f"{name}_vs_0" not in row:
+        return "-"
+    p = row[f"{name}_vs_0_p"]
+    return f"{row[f'{name}_vs_0']:+.3f} +- {row[f'{name}_vs_0_sem']:.3f}, p = {p:.2g}"
 
 
 def csc_spaces(page: Page, evaluate: dict[str, list[RunRecord]], data: Any) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from model.config import ZETA_GAIN
@@ -120,3 +121,35 @@ def test_the_cosine_table_groups_by_psi_within_one_learning_rule() -> None:
     assert row["psi"] == 0.0 and row["epochs"] == 100.5 and row["runs"] == 2
     (old,) = cosine_table(paper + before, ("rprop", 1.0))
     assert old["epochs"] == 7.5
+
+
+def _cosine_run(psi: float, seed: int, d_rel: float, d_avg: float) -> RunRecord:
+    rule = {"psi": psi, "optimiser": "paper", "zeta_gain": ZETA_GAIN}
+    metrics = {"cosine": {"epochs": 10.0, "d_avg": d_avg, "d_rel": d_rel}}
+    return RunRecord(
+        f"k{psi}-{seed}", "cosine", "cosine", 0, seed, seed, {}, rule, "done", 1, 2.0, None, 1.0, metrics
+    )
+
+
+def test_the_cosine_table_compares_every_psi_with_psi_zero_on_the_same_seeds() -> None:
+    rng = np.random.default_rng(0)
+    base = rng.uniform(0.85, 0.95, 30)
+    runs = [_cosine_run(0.0, s, base[s], 1.0) for s in range(30)]
+    runs += [
+        _cosine_run(
+            5e-5, s, base[s] + 0.01 + 0.002 * rng.standard_normal(), 0.9 + 0.01 * rng.standard_normal()
+        )
+        for s in range(30)
+    ]
+    runs += [
+        _cosine_run(2e-4, s, base[s] + 0.002 * rng.standard_normal(), 1.0) for s in range(29)
+    ]  # one seed short
+    zero, small, large = cosine_table(runs)
+    assert "d_rel_vs_0" not in zero and zero["seconds"] == 60.0
+    # the spread between seeds (0.03) is far above the effect (0.01): only the pairing sees it
+    assert small["d_rel_sem"] > 0.004 and small["d_rel_vs_0"] == pytest.approx(0.01, abs=0.002)
+    assert small["d_rel_vs_0_sem"] < 0.001 and small["d_rel_vs_0_p"] < 1e-6
+    assert small["d_avg_vs_0"] == pytest.approx(-0.1, abs=0.01)
+    assert large["runs"] == 29 and large["d_rel_vs_0_p"] > 0.01
+    (_, single) = cosine_table(runs[:1] + [_cosine_run(1e-5, 0, 0.9, 1.0)])
+    assert single["d_rel_vs_0_sem"] == 0.0 and math.isnan(single["d_rel_vs_0_p"])  # one pair: no test
