@@ -1,4 +1,9 @@
-"""Lesson 4, feeling: one action on the four shapes of one colour, and why touch alone is ambiguous."""
+"""Lesson 4, feeling: one action on the four shapes of one colour, and why touch alone is ambiguous.
+
+Beside the five joint angles MTRNN_s reads in the paper (4.1.1), each recording's hand path: the
+hand's position relative to its start in the torso frame (forward kinematics, `data.nao`), which
+does not depend on how the redundant arm was held to follow it (`model.encoding.kinematics`).
+"""
 
 from __future__ import annotations
 
@@ -6,12 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from data.nao import JOINT_NAMES
+from data.nao import JOINT_NAMES, forward_kinematics_batch
 from data.scenario import ACTIONS, COLOURS, SHAPES
 from data.world import FPS
+from model.config import MultiMTRNNConfig
 from server.lessons import rounded
 from server.services.corpus import Corpus
 from server.services.errors import Invalid, NotFound
+from server.services.models import LoadedModel
 from server.services.survey import Survey, SurveyService
 
 
@@ -26,6 +33,20 @@ def _rms(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(((_resample(a) - _resample(b)) ** 2).mean()))
 
 
+def _hand_path(entry: Any) -> np.ndarray:
+    """The hand's path [T, 3] of a recording relative to its first step, in centimetres, torso frame
+    (x forward, y left, z up), by forward kinematics of its joint angles (radians)."""
+    hand = forward_kinematics_batch(entry.joints)["hand"]
+    return 100.0 * (hand - hand[0])
+
+
+def _reads(served: LoadedModel) -> str:
+    """What the served model's MTRNN_s reads: its config's `proprioception` ("joints", "joints+hand"
+    or "hand"); a model without a MultiMTRNN config (the peer baseline) reads the joint codes."""
+    config = getattr(served.model, "config", None)
+    return config.proprioception if isinstance(config, MultiMTRNNConfig) else "joints"
+
+
 def _find(corpus: Corpus, action: str, colour: str, shape: str) -> Any | None:
     """The corpus entry of a scene (its lowest variant present)."""
     matches = [
@@ -37,7 +58,7 @@ def _find(corpus: Corpus, action: str, colour: str, shape: str) -> Any | None:
 
 
 def _row(survey: Survey, pair: str, what: str, x: Any, y: Any) -> dict:
-    """Distances of two recordings: joint angles (RMS, resampled) and both Csc spaces."""
+    """Distances of two recordings: joint angles and hand paths (RMS, resampled) and both Csc spaces."""
     index = {rid: i for i, rid in enumerate(survey.ids)}
 
     def dist(space: str) -> float:
@@ -48,6 +69,7 @@ def _row(survey: Survey, pair: str, what: str, x: Any, y: Any) -> dict:
         "pair": pair,
         "what": what,
         "joints_rms": round(_rms(x.proprioception, y.proprioception), 4),
+        "hand_rms": round(_rms(_hand_path(x), _hand_path(y)), 4),
         "c_s": dist("s"),
         "c_v": dist("v"),
     }
@@ -83,7 +105,13 @@ def feeling(corpus: Corpus, surveys: SurveyService, action: str, colour: str) ->
         raise Invalid(f"colour must be one of {', '.join(COLOURS)}")
     found = [(shape, _find(corpus, action, colour, shape)) for shape in SHAPES]
     series = [
-        {"id": e.id, "shape": shape, "fps": FPS, "proprioception": rounded(np.asarray(e.proprioception).T, 4)}
+        {
+            "id": e.id,
+            "shape": shape,
+            "fps": FPS,
+            "proprioception": rounded(np.asarray(e.proprioception).T, 4),
+            "hand_path": rounded(_hand_path(e).T, 4),
+        }
         for shape, e in found
         if e is not None
     ]
@@ -93,6 +121,7 @@ def feeling(corpus: Corpus, surveys: SurveyService, action: str, colour: str) ->
         "action": action,
         "colour": colour,
         "joint_names": list(JOINT_NAMES),
+        "reads": _reads(surveys.models.served),
         "series": series,
         "comparison": _comparison(corpus, surveys, action),
     }

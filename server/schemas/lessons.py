@@ -94,6 +94,9 @@ class Feeling(BaseModel):
     action: str
     colour: str
     joint_names: list[str]
+    reads: Literal["joints", "joints+hand", "hand"] = Field(
+        description="what the served model's MTRNN_s reads (MultiMTRNNConfig.proprioception)"
+    )
     series: list[dict[str, Any]]
     comparison: dict[str, Any] | None
 

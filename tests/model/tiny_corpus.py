@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from data.nao import NAO_ARM
 from model.config import MTRNNConfig, MultiMTRNNConfig, TrainingConfig
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES
@@ -34,7 +35,7 @@ def tiny_corpus(variants: int = 2, seed: int = 0) -> SequenceSet:
                     v.append((vision + 0.01 * rng.standard_normal(vision.shape)).astype(np.float32))
                     u.append(f"{action} the {colour} {obj}.")
                     ids.append(f"{action}-{colour}-{obj}-{k}")
-    return SequenceSet(p, v, u, ids)
+    return SequenceSet(p, v, u, ids, arm=NAO_ARM.to_dict())  # codes of the NAO's joints
 
 
 def tiny_config(epochs: int = 5) -> MultiMTRNNConfig:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from data.nao import NAO_ARM
 from model.data import SequenceSet
 
 SCENES = [
@@ -42,7 +43,7 @@ def tiny_sequence_set(variants: int = 2, steps: int = 12) -> SequenceSet:
             vis.append(np.repeat(frame[None, :], steps, axis=0) + rng.normal(0, 0.01, (steps, 21)))
             texts.append(f"{action} the {colour} {shape}.")
             ids.append(f"{action}-{colour}-{shape}-{v}")
-    return SequenceSet(prop, vis, texts, ids)
+    return SequenceSet(prop, vis, texts, ids, arm=NAO_ARM.to_dict())  # codes of the NAO's joints
 
 
 TINY_OVERRIDES = {

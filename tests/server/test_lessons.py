@@ -352,3 +352,17 @@ def test_generalising_scores_every_scene_of_each_model_against_its_split(client:
 def test_generalising_an_unknown_model_is_404(client: TestClient) -> None:
     r = client.get("/api/lessons/generalising", params={"model": "nope"})
     assert r.status_code == 404 and "faithful" in _detail(r)
+
+
+def test_feeling_gives_each_hand_path_in_cm_and_what_the_served_model_reads(client: TestClient) -> None:
+    body = client.get("/api/lessons/feeling", params={"action": "slide", "colour": "red"}).json()
+    assert body["reads"] in ("joints", "joints+hand", "hand")
+    for s in body["series"]:
+        path = np.asarray(s["hand_path"])
+        assert path.shape == (3, len(s["proprioception"][0]))
+        assert np.all(path[:, 0] == 0)  # relative to where the hand started
+        assert np.abs(path).max() < 45 and np.abs(path).max() > 0.5  # cm: the NAO arm reaches ~22 cm
+    rows = body["comparison"]["rows"]
+    assert all(r["hand_rms"] >= 0 for r in rows)
+    # as for the joints, in the synthetic world the hand barely depends on the object
+    assert rows[0]["hand_rms"] < rows[1]["hand_rms"]

@@ -10,6 +10,7 @@ app instead, and with MTRNN_LESSON_SCREENSHOTS=<dir> it saves one screenshot per
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import time
 from collections.abc import Callable, Iterator
@@ -308,3 +309,16 @@ def test_hide_flags_remove_controls_and_survive_navigation(page) -> None:  # noq
     page.wait_for_selector("#lesson-speaking")
     assert "hide=tau%2Ctime%2Canswer" in page.url or "hide=tau,time,answer" in page.url
     assert page.is_hidden("button.reveal")
+
+
+def test_feeling_shows_the_hand_path_under_the_same_time_cursor(page) -> None:  # noqa: ANN001
+    _open(page, "feeling", shown="#touch-distances", plot="hand-plot")
+    hand = next(p for p in plot_titles(page) if p["id"] == "hand-plot")
+    assert hand["title"].startswith("hand path of") and "cm" in hand["title"]
+    ys = [t for k, t in sorted(hand["axes"].items()) if k.startswith("y")]
+    assert ys == ["forward x (cm)", "left y (cm)", "up z (cm)"]
+    assert hand["traces"] == 3 * page.eval_on_selector_all("#shown option", "els => els.length")
+    assert "reads" in page.inner_text("#reads-note")
+    assert "hand path RMS (cm)" in page.inner_text("#touch-distances thead")
+    moved = _changes(page, _plot(page, "hand-plot", "layout.shapes"), lambda: _slide(page, "#time", 1.5))
+    assert [s["x0"] for s in json.loads(moved)] == [1.5, 1.5, 1.5]  # the cursor of the joint plot

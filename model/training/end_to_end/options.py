@@ -20,8 +20,9 @@ class EndToEndOptions:
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
     # MTRNN_s reads the joint codes ("joints", the paper's), the hand's path in the torso frame beside
-    # them ("joints+hand") or instead ("hand"), by the arm's forward kinematics (issue 12)
-    hand_path: str = "joints"
+    # them ("joints+hand") or instead ("hand"), by the arm's forward kinematics (issue 12,
+    # docs/experiments/cross_setup.md: "hand" reads held-out setups' actions at 0.74, the codes 0.54)
+    hand_path: str = "hand"
     normalise_inputs: bool = True  # standardise encoder inputs while training (`InputNormaliser`)
     selection_scenes: int = 0  # training scenes held out to calibrate and select perception
     select_every: int = 10  # epochs between two selections

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from data.nao import NAO_ARM
 from model.data import SequenceSet
 from tests.model.tiny_data import COLOUR_RGB, SHAPE_BASE
 
@@ -29,4 +30,4 @@ def square_sequence_set(variants: int = 1, steps: int = 10) -> SequenceSet:
                 vis.append(np.repeat(frame[None, :], steps, axis=0) + rng.normal(0, 0.01, (steps, 21)))
                 texts.append(f"{action} the {colour} {shape}.")
                 ids.append(f"{action.replace(' ', '-')}-{colour}-{shape}-{v}")
-    return SequenceSet(prop, vis, texts, ids)
+    return SequenceSet(prop, vis, texts, ids, arm=NAO_ARM.to_dict())  # codes of the NAO's joints

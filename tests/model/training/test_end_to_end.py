@@ -282,15 +282,14 @@ def test_plain_end_to_end_trains_everything_through_the_auditory_loss() -> None:
     assert not torch.equal(model.assemblies.projection, initial.assemblies.projection)
 
 
-@pytest.mark.parametrize("reading, io", [("joints+hand", 11), ("hand", 6)])
+@pytest.mark.parametrize("reading, io", [("joints", 5), ("joints+hand", 11), ("hand", 6)])
 def test_hand_path_reads_the_arm_the_recordings_came_from_and_checkpoints_it(tmp_path, reading, io) -> None:
-    from data.nao import NAO_ARM
-
-    data = replace(tiny_corpus(variants=1), arm=NAO_ARM.to_dict())
+    data = tiny_corpus(variants=1)
     options = replace(_tiny_options(), hand_path=reading, selection_scenes=0)
     trained = train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
     config = trained.model.config
-    assert (config.somatosensory.io, config.proprioception, config.arm) == (io, reading, NAO_ARM.to_dict())
+    arm = None if reading == "joints" else data.arm  # the paper's codes need no kinematics
+    assert (config.somatosensory.io, config.proprioception, config.arm) == (io, reading, arm)
     before = trained.model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
     checkpoint.save(trained.model, tmp_path / "m", trained.meta)
     model, _ = checkpoint.load(tmp_path / "m")
@@ -302,7 +301,7 @@ def test_hand_path_reads_the_arm_the_recordings_came_from_and_checkpoints_it(tmp
 
 
 def test_hand_path_needs_the_arm_of_the_recordings() -> None:
-    data = tiny_corpus(variants=1)  # no arm: nothing to read the hand's path through
+    data = replace(tiny_corpus(variants=1), arm=None)  # nothing to read the hand's path through
     options = replace(_tiny_options(), hand_path="joints+hand", selection_scenes=0)
     with pytest.raises(ValueError, match="arm"):
         train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
