@@ -15,6 +15,7 @@ the last joint frame, and the joint limits that decode the [0, 1] codes (`propri
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import torch
@@ -50,8 +51,7 @@ class ArmChain:
     @property
     def reach(self) -> float:
         """Sum of the link lengths: the scale of the hand-path columns."""
-        links = [torch.tensor(o).norm().item() for o in self.origins[1:]]
-        return float(sum(links) + torch.tensor(self.hand_offset).norm().item())
+        return sum(math.hypot(*o) for o in self.origins[1:]) + math.hypot(*self.hand_offset)
 
     def to_dict(self) -> dict:
         return asdict(self)
