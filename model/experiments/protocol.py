@@ -209,20 +209,20 @@ def execute_batch(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutco
     started = time.perf_counter()
     try:
         results = resolve(runner)(data, specs)
+        return [
+            RunOutcome(
+                key=s.key,
+                ok=True,
+                metrics=_flat_metrics(r.metrics),
+                seconds=float(r.seconds),
+                artifacts=dict(r.artifacts or {}),
+            )
+            for s, r in zip(specs, results, strict=True)
+        ]
     except Exception:  # the whole batch is recorded as failed and retried on restart
         error = traceback.format_exc()
         seconds = (time.perf_counter() - started) / len(specs)
         return [RunOutcome(key=s.key, ok=False, seconds=seconds, error=error) for s in specs]
-    return [
-        RunOutcome(
-            key=s.key,
-            ok=True,
-            metrics=_flat_metrics(r.metrics),
-            seconds=float(r.seconds),
-            artifacts=dict(r.artifacts or {}),
-        )
-        for s, r in zip(specs, results, strict=True)
-    ]
 
 
 def execute_task(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutcome]:

@@ -244,3 +244,20 @@ def test_a_batched_runner_gets_its_runs_in_batches_and_the_store_one_record_each
     assert sorted(r.metrics["train"]["batch"] for r in result.runs) == [1, 3, 3, 3, 3, 3, 3]
     again = run_protocol(None, specs, store, "local", workers=2, runner=f"{__name__}:batched_echo")
     assert again.executed == 0 and again.skipped == 7
+
+
+def batched_short(data, specs):
+    """A broken batched runner: one result too few."""
+    return batched_echo(data, specs)[:-1]
+
+
+batched_short.batch_size = 2
+
+
+def test_a_batched_runner_that_breaks_fails_its_runs_and_never_the_driver(tmp_path) -> None:
+    specs = [replace(s, seed=10 + i) for i, s in enumerate(plan("echo", "echo", 3, 1, {}, "d"))]
+    store = RunStore(tmp_path / "runs")
+    result = run_protocol(None, specs, store, "local", workers=1, runner=f"{__name__}:batched_short")
+    assert sorted(result.failed) == sorted(s.key for s in specs) and result.executed == 0
+    failed = store.runs(keys=[s.key for s in specs], status="failed")  # recorded, retried on restart
+    assert len(failed) == 3
