@@ -36,10 +36,11 @@ from model.experiments.evaluation import score, slot_vocabularies  # noqa: E402
 from model.experiments.protocol import apply_overrides, run_seed  # noqa: E402
 from model.experiments.splits import split_indices  # noqa: E402
 from model.metrics import phoneme_f1, sentence_exact  # noqa: E402
-from model.mtrnn import MTRNN, kl_divergence  # noqa: E402
+from model.mtrnn import MTRNN  # noqa: E402
 from model.training import train  # noqa: E402
-from model.training.common import encode_utterances, make_batch, make_optimiser, uniform  # noqa: E402
-from model.training.faithful import assemblies_loss, distinct_rows, solve_assemblies  # noqa: E402
+from model.training.common import encode_utterances, make_batch  # noqa: E402
+from model.training.faithful import assemblies_loss, distinct_rows, solve_assemblies, train_auditory  # noqa: E402
+from server.commands.evaluate import parse_overrides  # noqa: E402
 
 SCORES = ("sentence_exact", "f1", "edit_distance", "slot_action", "slot_colour", "slot_object")
 
@@ -57,35 +58,27 @@ def _said(activity: torch.Tensor, sentences: list[str], lexicon: Lexicon) -> dic
 def auditory_budget(
     train_set: SequenceSet, config: MultiMTRNNConfig, epochs: int, every: int, seed: int
 ) -> None:
-    """MTRNN_a alone on the distinct sentences, as `model.training.faithful.train_auditory` learns it."""
+    """MTRNN_a alone on the distinct sentences, learning by `model.training.faithful.train_auditory`
+    (its progress calls are where it is checked)."""
     sentences, _ = distinct_rows(train_set.utterances)
     lexicon = Lexicon.from_sentences(sentences)
     targets = encode_utterances(sentences, config.generation_steps)[0]
     net = MTRNN(config.auditory, torch.Generator().manual_seed(seed))
-    c0 = torch.nn.Parameter(
-        uniform((len(sentences), net.cfg.csc), net.cfg.csc_init, torch.Generator().manual_seed(seed + 1))
-    )
-    optimiser = make_optimiser(
-        [{"params": list(net.parameters())}, {"params": [c0], "context_of": net}], config.training
-    )
     started = time.perf_counter()
-    for epoch in range(1, epochs + 1):
-        optimiser.zero_grad()
-        loss = kl_divergence(
-            targets, net.generate(c0, targets.shape[1], teacher=targets, alpha=config.training.alpha)
-        )
-        loss.backward()
-        optimiser.step()
-        if epoch % every == 0:
+
+    def check(stage: str, epoch: int, total: int, loss: float, c0: torch.Tensor | None = None) -> None:
+        if epoch % every == 0 and c0 is not None:
             with torch.no_grad():
                 said = _said(net.generate(c0, targets.shape[1]), sentences, lexicon)
             line = {
                 "epoch": epoch,
-                "kld": round(loss.item(), 3),
+                "kld": round(loss, 3),
                 **said,
                 "seconds": round(time.perf_counter() - started),
             }
             print(json.dumps(line), flush=True)
+
+    train_auditory(net, targets, config.training, torch.Generator().manual_seed(seed + 1), check, epochs)
 
 
 def stages(
@@ -127,7 +120,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--check-every", type=int, default=250, help="--auditory-only: epochs between checks")
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    overrides = {k: json.loads(v) for k, _, v in (s.partition("=") for s in args.set)}
+    overrides = parse_overrides(args.set)
     config = MultiMTRNNConfig.from_dict(apply_overrides(MultiMTRNNConfig().to_dict(), overrides))
     data = load_corpus().training_data()
     train_idx, test_idx = split_indices(data.ids, data.utterances, args.fold)

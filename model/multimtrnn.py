@@ -27,6 +27,16 @@ from model.encoding.words import align
 from model.mtrnn import MTRNN
 
 
+def padded(x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: int) -> tuple[Tensor, Tensor]:
+    """A list of [T_i, F] arrays (`pad_sequences`), or a padded [B, T, F] tensor with optional
+    lengths (all full by default), as [B, T, columns] and lengths [B]."""
+    if isinstance(x, Tensor) and x.ndim == 3:
+        if lengths is None:
+            lengths = torch.full((x.shape[0],), x.shape[1])
+        return x[..., :columns], lengths
+    return pad_sequences(x, columns)
+
+
 def somatosensory_inputs(
     proprioception: Sequence[np.ndarray] | Tensor, config: MultiMTRNNConfig, lengths: Tensor | None = None
 ) -> tuple[Tensor, Tensor]:
@@ -35,17 +45,11 @@ def somatosensory_inputs(
     the codes themselves (the paper), the codes and the hand's path read through `config.arm`
     (`model.encoding.kinematics`), or the hand's path alone."""
     arm = None if config.proprioception == "joints" else ArmChain.from_dict(config.arm or {})
-    joints = config.somatosensory.io if arm is None else arm.joints
-    if isinstance(proprioception, Tensor) and proprioception.ndim == 3:
-        if lengths is None:
-            lengths = torch.full((proprioception.shape[0],), proprioception.shape[1])
-        p = proprioception[..., :joints]
-    else:
-        p, lengths = pad_sequences(proprioception, joints)
+    p, lengths = padded(proprioception, lengths, config.somatosensory.io if arm is None else arm.joints)
     if arm is None:
         return p, lengths
     read = read_hand_path(p, arm)
-    return (read if config.proprioception == "joints+hand" else read[..., joints:]), lengths
+    return (read if config.proprioception == "joints+hand" else read[..., arm.joints :]), lengths
 
 
 @dataclass
@@ -212,18 +216,8 @@ class MultiMTRNN(nn.Module):
         """(c_s,T, c_v,T) [B, csc] from lists of [T_i, F] arrays, or padded [B, T, F] tensors with
         lengths. Vision keeps its first `config.visual.io` columns (19 paper features)."""
         p, p_len = somatosensory_inputs(proprioception, self.config, proprioception_lengths)
-        v, v_len = self._batch(vision, vision_lengths, self.config.visual.io)
+        v, v_len = padded(vision, vision_lengths, self.config.visual.io)
         return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
-
-    @staticmethod
-    def _batch(
-        x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: int
-    ) -> tuple[Tensor, Tensor]:
-        if isinstance(x, Tensor) and x.ndim == 3:
-            if lengths is None:
-                lengths = torch.full((x.shape[0],), x.shape[1])
-            return x[..., :columns], lengths
-        return pad_sequences(x, columns)
 
     # --- Csc -> utterance -----------------------------------------------------------------------
 
