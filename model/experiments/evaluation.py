@@ -131,9 +131,33 @@ def run_once(
     checkpoint whose meta carries the metrics, the split's name (`split_kind`, `train_scenes`) and
     its recordings (`split`)."""
     start = time.perf_counter()
-    train_idx, test_idx = split_indices(data.ids, data.utterances, fold, split, train_scenes=train_scenes)
-    train_set, test_set = data.subset(train_idx), data.subset(test_idx)
+    train_set, test_set = split_sets(data, fold, split, train_scenes)
     trained = train(train_set, mode=mode, config=config, seed=seed, progress=progress)
+    return scored_run(trained, data, fold, seed, train_set, test_set, start, out_dir, split, train_scenes)
+
+
+def split_sets(
+    data: SequenceSet, fold: int, split: str = "scenes", train_scenes: int | None = None
+) -> tuple[SequenceSet, SequenceSet]:
+    """The training and test recordings of `fold` on `split` (`split_indices`)."""
+    train_idx, test_idx = split_indices(data.ids, data.utterances, fold, split, train_scenes=train_scenes)
+    return data.subset(train_idx), data.subset(test_idx)
+
+
+def scored_run(
+    trained: TrainedModel,
+    data: SequenceSet,
+    fold: int,
+    seed: int,
+    train_set: SequenceSet,
+    test_set: SequenceSet,
+    start: float,
+    out_dir: str | Path | None = None,
+    split: str = "scenes",
+    train_scenes: int | None = None,
+) -> RunResult:
+    """`trained` scored on both sides of its split, with its meta (and saved to `out_dir` if given);
+    the run's seconds are counted from `start` (`time.perf_counter()`)."""
     metrics = score_split(
         trained.model, trained.lexicon, train_set, test_set, slot_vocabularies(data.utterances)
     )
@@ -145,7 +169,7 @@ def run_once(
         checkpoint.save(trained.model, out_dir, meta, trained.csc, trained.familiarity)
     log.info(
         "%s %s fold %d seed %d: test exact %.3f F1 %.3f (%.1f s)",
-        mode,
+        meta["mode"],
         split,
         fold,
         seed,

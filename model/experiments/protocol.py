@@ -202,7 +202,7 @@ def execute_run(data: Any, spec: RunSpec, runner: str = DEFAULT_RUNNER) -> RunOu
 
 def execute_batch(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutcome]:
     """Train `specs` together with a batched runner: runner(data, specs) -> one result per spec, in
-    order; each run is charged an equal share of the batch's time. Never raises."""
+    order (its metrics, seconds, artifacts and optionally its checkpoint files). Never raises."""
     import torch
 
     torch.set_num_threads(1)
@@ -215,6 +215,7 @@ def execute_batch(data: Any, specs: list[RunSpec], runner: str) -> list[RunOutco
                 ok=True,
                 metrics=_flat_metrics(r.metrics),
                 seconds=float(r.seconds),
+                checkpoint=dict(getattr(r, "checkpoint", None) or {}),
                 artifacts=dict(r.artifacts or {}),
             )
             for s, r in zip(specs, results, strict=True)

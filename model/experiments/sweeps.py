@@ -4,7 +4,9 @@ experiment (3.2.2, Fig. 3), both as runs of the evaluation engine (`model.experi
 The psi_s sweep plans K folds x N inits per value with `training.psi_s` set, all in one store
 experiment ("psi_s") so that every value shares the same folds and seeds; its table gives, per
 value, the mixed F1 and edit distance (Fig. 9 a, b), d_avg / d_rel (c) and d_inter / d_intra (d)
-of the somatosensory Csc, each as mean and standard error over runs.
+of the somatosensory Csc, each as mean and standard error over runs. Its faithful runs go through
+the batched runner `psi_s_runs`: the values of one (fold, init) share MTRNN_a, which psi_s never
+reaches (`model.training.faithful.train_faithful_variants`).
 
 The cosine sweep stores one run per (psi, seed) and trains them in vectorised batches of
 `cosine_runs.batch_size` runs, each batch an engine task, so it spreads over cores and Ray workers
@@ -13,9 +15,11 @@ the same way; its table gives epochs, d_avg and d_rel (Fig. 3).
 
 from __future__ import annotations
 
+import tempfile
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from model.experiments.protocol import apply_overrides, plan
@@ -25,6 +29,7 @@ from model.metrics import mean_sem, paired_difference
 PSI_S_PAPER = (1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2)  # {1, 2, 5} x 10^-k, k in {4, 3, 2}
 PSI_COSINE_PAPER = (0.0, 1e-5, 5e-5, 2e-4)  # Fig. 3 (c-f)
 COSINE_RUNNER = "model.experiments.sweeps:cosine_runs"
+PSI_S_RUNNER = "model.experiments.sweeps:psi_s_runs"  # faithful sweeps; other modes use run_once
 CSC_SPACE_SWEPT = "somatosensory"  # Fig. 9 (c, d) measure the somatosensory Csc
 
 
@@ -40,13 +45,57 @@ def psi_s_specs(
     train_scenes: int | None = None,
 ) -> list[RunSpec]:
     """Every (psi_s, fold, init) run; the same folds and seeds for every value (paired design), on
-    one protocol split (`model.experiments.splits`; the paper's by default)."""
+    one protocol split (`model.experiments.splits`; the paper's by default). Ordered by fold and
+    init, so that the values of one (fold, init) follow each other (`psi_s_runs` batches them)."""
     specs: list[RunSpec] = []
     for value in values:
         cfg = apply_overrides(config, {"training.psi_s": float(value)})
         where = {"params": {"psi_s": float(value)}, "split": split, "train_scenes": train_scenes}
         specs += plan("psi_s", mode, folds, inits, cfg, digest, base_seed, **where)
-    return specs
+    return sorted(specs, key=lambda spec: (spec.fold, spec.init))
+
+
+@dataclass
+class SweepRunResult:
+    """One psi_s run in the shape the engine expects of a runner's result."""
+
+    metrics: dict[str, Any]
+    seconds: float
+    checkpoint: dict[str, bytes]
+    artifacts: dict[str, Any] = field(default_factory=dict)
+
+
+def psi_s_runs(data: Any, specs: Sequence[RunSpec]) -> list[SweepRunResult]:
+    """Batched engine runner for a faithful psi_s sweep: the specs of one (fold, seed, split) train
+    together with `train_faithful_variants` (one MTRNN_a, then each value's encoders and assemblies),
+    and each is scored and saved as `run_once` would; a run's seconds are its own stages plus an
+    equal share of the shared one."""
+    from model.experiments.evaluation import scored_run, split_sets
+    from model.training.faithful import train_faithful_variants
+
+    groups: dict[tuple, list[int]] = {}
+    for i, spec in enumerate(specs):
+        if spec.mode != "faithful":
+            raise ValueError(f"psi_s_runs trains faithful runs, not {spec.mode!r}")
+        groups.setdefault((spec.fold, spec.seed, spec.split, spec.train_scenes), []).append(i)
+    results: list[SweepRunResult | None] = [None] * len(specs)
+    for (fold, seed, split, train_scenes), members in groups.items():
+        train_set, test_set = split_sets(data, fold, split, train_scenes)
+        trained = train_faithful_variants(train_set, [specs[i].config for i in members], seed)
+        shared = trained[0].meta["seconds"]["auditory"]
+        for i, model in zip(members, trained, strict=True):
+            own = sum(model.meta["seconds"].values()) - shared + shared / len(members)
+            start = time.perf_counter() - own  # scored_run adds the scoring
+            with tempfile.TemporaryDirectory(prefix="mtrnn-run-") as tmp:
+                run = scored_run(
+                    model, data, fold, seed, train_set, test_set, start, tmp, split, train_scenes
+                )
+                files = {p.name: p.read_bytes() for p in sorted(Path(tmp).iterdir()) if p.is_file()}
+            results[i] = SweepRunResult(run.metrics, run.seconds, files)
+    return [r for r in results if r is not None]
+
+
+psi_s_runs.batch_size = len(PSI_S_PAPER) + 1  # one (fold, init) of the paper's values and psi_s = 0
 
 
 # --- the cosine experiment as engine tasks ---------------------------------------------------------

@@ -29,7 +29,7 @@ from typing import Literal
 import torch
 from torch import Tensor, nn
 
-from model.config import MultiMTRNNConfig, TrainingConfig
+from model.config import MultiMTRNNConfig, TrainingConfig, mode_options
 from model.data import SequenceSet
 from model.mtrnn import MTRNN, context_abstraction_loss, kl_divergence, scaled_logistic
 from model.multimtrnn import MultiMTRNN
@@ -43,6 +43,8 @@ from model.training.common import (
     encode_utterances,
     make_batch,
     make_optimiser,
+    prepare,
+    torch_threads,
     uniform,
 )
 
@@ -219,6 +221,45 @@ def _staged(
 
 train_faithful = MultiMTRNNMode(_staged, FaithfulOptions)
 
+# what only the later stages read: configs that differ in these alone share stage 1 (MTRNN_a)
+LATER_STAGES = ("psi_s", "psi_v", "epochs_somatosensory", "epochs_visual", "epochs_assemblies")
+
+
+def _stage_one(config: MultiMTRNNConfig) -> str:
+    training = replace(config.training, **{name: 0 for name in LATER_STAGES})
+    return repr(replace(config, training=training, options={}).to_dict())
+
+
+def train_faithful_variants(
+    data: SequenceSet,
+    configs: Sequence[MultiMTRNNConfig | dict | None],
+    seed: int,
+    progress: ProgressFn | None = None,
+) -> list[TrainedModel]:
+    """Faithful trainings of one seed whose configs differ only in what the later stages read
+    (`LATER_STAGES`: psi_s, psi_v and the encoders' and assemblies' budgets, as in the psi_s sweep,
+    Fig. 9) and in `FaithfulOptions`: MTRNN_a learns once and every variant starts its encoders from
+    it. Each result is what `train_faithful(data, config, seed)` gives (the nets start from the
+    same seed); its meta["seconds"]["auditory"] is the shared stage's time."""
+    prepared = [prepare(data, config) for config in configs]
+    if len({_stage_one(config) for config in prepared}) > 1:
+        raise ValueError(f"variants may differ only in {LATER_STAGES} and the faithful options")
+    shared: tuple[dict, Tensor, float] | None = None
+    results = []
+    for config in prepared:
+        options = mode_options(FaithfulOptions, config)
+        _check(options)
+        with torch_threads(config.training.threads):
+            staged = _Staged(data, config, seed, progress)
+            if shared is None:
+                c_a0 = staged.auditory()
+                shared = (staged.model.auditory.state_dict(), c_a0, staged.seconds["auditory"])
+            else:
+                staged.model.auditory.load_state_dict(shared[0])
+                staged.seconds["auditory"] = shared[2]
+            results.append(staged.run(options, shared[1]))
+    return results
+
 
 class _Staged:
     """One faithful training: the model, its batch and the stages' shared bookkeeping."""
@@ -234,8 +275,9 @@ class _Staged:
         self.report = ProgressReporter(progress, self.training.progress_every, self.history)
         self.seconds: dict[str, float] = {}
 
-    def run(self, options: FaithfulOptions) -> TrainedModel:
-        c_a0 = self.auditory()
+    def run(self, options: FaithfulOptions, c_a0: Tensor | None = None) -> TrainedModel:
+        """The three stages; with `c_a0` (each recording's) MTRNN_a is taken as already trained."""
+        c_a0 = self.auditory() if c_a0 is None else c_a0
         groups = self.sentence_of if options.perception_targets == "scene" else None
         targets = {stage: self.encoder(stage, groups) for stage in ("somatosensory", "visual")}
         self.assemblies(c_a0, options.assemblies_solver)

@@ -56,8 +56,8 @@ def _fmt(v: float, e: float) -> str:
 
 
 def run_psi_s(args: argparse.Namespace) -> int:
-    from model.experiments.protocol import data_digest, run_protocol
-    from model.experiments.sweeps import PSI_S_PAPER, psi_s_specs, psi_s_table
+    from model.experiments.protocol import DEFAULT_RUNNER, data_digest, run_protocol
+    from model.experiments.sweeps import PSI_S_PAPER, PSI_S_RUNNER, psi_s_specs, psi_s_table
 
     values = args.values or list(PSI_S_PAPER)
     config = build_config(parse_overrides(args.overrides), args.mode)
@@ -65,10 +65,11 @@ def run_psi_s(args: argparse.Namespace) -> int:
     store = run_store(args.run_dir)
     digest = data_digest(data)
     specs = psi_s_specs(values, args.mode, args.folds, args.inits, config, digest, args.seed)
+    runner = PSI_S_RUNNER if args.mode == "faithful" else DEFAULT_RUNNER
     result = with_progress(
         store,
         specs,
-        lambda update: run_protocol(data, specs, store, **engine_options(args, update)),
+        lambda update: run_protocol(data, specs, store, runner=runner, **engine_options(args, update)),
     )
     table = psi_s_table(result.runs)
     if args.json:

@@ -10,17 +10,20 @@ import pytest
 
 from model.config import ZETA_GAIN
 from model.experiments.cosine import CosineSetup, train_cosine_runs
-from model.experiments.protocol import default_config
+from model.experiments.protocol import default_config, execute_task, tasks
 from model.experiments.runstore import RunRecord
 from model.experiments.sweeps import (
     COSINE_RUNNER,
+    PSI_S_RUNNER,
     cosine_runs,
     cosine_specs,
     cosine_table,
+    psi_s_runs,
     psi_s_specs,
     psi_s_table,
 )
 from model.metrics import mean_sem
+from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
 def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None:
@@ -32,6 +35,29 @@ def test_the_psi_s_sweep_uses_the_same_folds_and_seeds_for_every_value() -> None
         by_value.setdefault(s.params["psi_s"], []).append((s.fold, s.init, s.seed))
     assert by_value[1e-4] == by_value[5e-4]
     assert len({s.key for s in specs}) == 8
+    # the values of one (fold, init) follow each other: one batch of psi_s_runs trains them together
+    assert [(s.fold, s.init) for s in specs[:2]] == [(0, 0), (0, 0)]
+    assert [c[0].params["psi_s"] for c in tasks(specs, PSI_S_RUNNER)] == [1e-4]
+
+
+def test_psi_s_runs_score_each_value_as_run_once_would(tmp_path) -> None:
+    from model.experiments.evaluation import run_once
+
+    data = tiny_corpus(variants=2)
+    config = tiny_config(epochs=2).to_dict()
+    specs = psi_s_specs([0.0, 5e-2], "faithful", folds=1, inits=1, config=config, digest="d")
+    results = psi_s_runs(data, specs)
+    assert len(results) == 2 and all(r.seconds > 0 for r in results)
+    for spec, result in zip(specs, results, strict=True):
+        alone = run_once(data, "faithful", spec.fold, spec.seed, config=spec.config)
+        assert result.metrics["train"]["f1"] == pytest.approx(alone.metrics["train"]["f1"])
+        somatosensory = result.metrics["train"]["csc"]["somatosensory"]
+        assert somatosensory == pytest.approx(alone.metrics["train"]["csc"]["somatosensory"])
+        assert {"model.safetensors", "meta.json"} <= set(result.checkpoint)
+    outcomes = execute_task(data, specs, PSI_S_RUNNER)  # the engine keeps the checkpoints
+    assert [o.ok for o in outcomes] == [True, True] and all(o.checkpoint for o in outcomes)
+    with pytest.raises(ValueError, match="faithful"):
+        psi_s_runs(data, [replace(specs[0], mode="peer")])
 
 
 @pytest.mark.slow

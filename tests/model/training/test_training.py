@@ -19,6 +19,7 @@ from model.training.faithful import (
     solve_assemblies,
     train_encoder,
     train_faithful,
+    train_faithful_variants,
 )
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
@@ -203,6 +204,29 @@ def test_faithful_options_default_to_the_paper_and_are_recorded():
     assert len({tuple(r) for r in shared.csc["somatosensory_cT"].tolist()}) == 12
     with pytest.raises(ValueError, match="perception_targets"):
         train_faithful(data, config, 0, None, FaithfulOptions(perception_targets="nope"))
+
+
+def test_variants_sharing_mtrnn_a_train_as_each_would_alone():
+    data = tiny_corpus(variants=2)
+    configs = []
+    for psi_s, encoder_epochs in ((0.0, 3), (5e-2, 3), (5e-2, 4)):
+        config = tiny_config(epochs=3)
+        config.training.psi_s, config.training.epochs_somatosensory = psi_s, encoder_epochs
+        configs.append(config)
+    variants = train_faithful_variants(data, configs, seed=4)
+    assert len(variants) == 3
+    for config, variant in zip(configs, variants, strict=True):
+        alone = train_faithful(data, config, 4)
+        for name in ("auditory_c0", "somatosensory_cT", "visual_cT"):
+            assert torch.equal(torch.as_tensor(variant.csc[name]), torch.as_tensor(alone.csc[name]))
+        for a, b in zip(variant.model.state_dict().values(), alone.model.state_dict().values(), strict=True):
+            assert torch.equal(a, b)
+    targets = [torch.as_tensor(v.csc["somatosensory_cT"]) for v in variants]
+    assert not torch.equal(targets[0], targets[1])  # psi_s moved the second's targets
+    other = tiny_config(epochs=3)
+    other.training.alpha = 0.5  # MTRNN_a's teacher forcing: another stage 1
+    with pytest.raises(ValueError, match="may differ only"):
+        train_faithful_variants(data, [configs[0], other], seed=4)
 
 
 def test_mode_options_are_selectable_through_the_config():
