@@ -6,6 +6,8 @@ import math
 from dataclasses import asdict, dataclass, field, fields
 from typing import Literal
 
+from model.encoding.vision import FEATURES as WITH_CENTROID  # the paper's 19, then the centroid
+
 # Scaled logistic of the paper (3.4.3, after Heinrich & Wermter 2014), see `model.mtrnn.scaled_logistic`.
 KAPPA_H = 0.35795  # range: f spans (-kappa_h, 1 + kappa_h)
 KAPPA_W = 0.92  # slope
@@ -115,6 +117,10 @@ class MultiMTRNNConfig:
     # hand's path instead), the path read through `arm` (`model.encoding.kinematics.ArmChain.to_dict()`).
     proprioception: Literal["joints", "joints+hand", "hand"] = "joints"
     arm: dict | None = None
+    # What MTRNN_v reads of the object's centroid (`model.multimtrnn.visual_inputs`, end_to_end's
+    # `object_motion`): where it lies in the frame (False), or where it has moved since the first
+    # frame (True: the object's own motion, evidence for the action whatever the workspace).
+    object_motion: bool = False
 
     def __post_init__(self) -> None:
         if self.proprioception not in PROPRIOCEPTION_READINGS:
@@ -123,6 +129,8 @@ class MultiMTRNNConfig:
             )
         if self.proprioception != "joints" and self.arm is None:
             raise ValueError(f"reading {self.proprioception!r} needs the arm's kinematics (`arm`)")
+        if self.object_motion and self.visual.io != WITH_CENTROID:
+            raise ValueError(f"object_motion needs MTRNN_v to read the centroid ({WITH_CENTROID} inputs)")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -138,6 +146,7 @@ class MultiMTRNNConfig:
             options=dict(d.get("options") or {}),
             proprioception=d.get("proprioception", "joints"),
             arm=d.get("arm"),
+            object_motion=bool(d.get("object_motion", False)),
         )
 
 

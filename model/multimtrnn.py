@@ -23,6 +23,7 @@ from model.assemblies import CellAssemblies, WordAssemblies
 from model.config import MultiMTRNNConfig
 from model.encoding.kinematics import ArmChain, read_hand_path
 from model.encoding.utterance import Lexicon, decode_text
+from model.encoding.vision import VISUAL_FEATURES
 from model.encoding.words import align
 from model.mtrnn import MTRNN
 
@@ -50,6 +51,22 @@ def somatosensory_inputs(
         return p, lengths
     read = read_hand_path(p, arm)
     return (read if config.proprioception == "joints+hand" else read[..., arm.joints :]), lengths
+
+
+def visual_inputs(
+    vision: Sequence[np.ndarray] | Tensor, config: MultiMTRNNConfig, lengths: Tensor | None = None
+) -> tuple[Tensor, Tensor]:
+    """What MTRNN_v reads, padded [B, T, io], and the lengths [B], from a list of [T_i, F] vision
+    features (`model.encoding.vision`) or a padded [B, T, F] tensor with lengths: the first
+    `config.visual.io` (the paper's 19, or with the object's centroid); with `config.object_motion`
+    the centroid is taken relative to the first frame's, the object's own motion."""
+    v, lengths = padded(vision, lengths, config.visual.io)
+    if not config.object_motion:
+        return v, lengths
+    centroid = slice(VISUAL_FEATURES, VISUAL_FEATURES + 2)
+    valid = (torch.arange(v.shape[1])[None, :] < lengths[:, None])[..., None]
+    moved = (v[..., centroid] - v[:, :1, centroid]) * valid
+    return torch.cat([v[..., :VISUAL_FEATURES], moved], dim=-1), lengths
 
 
 @dataclass
@@ -214,9 +231,9 @@ class MultiMTRNN(nn.Module):
         vision_lengths: Tensor | None = None,
     ) -> tuple[Tensor, Tensor]:
         """(c_s,T, c_v,T) [B, csc] from lists of [T_i, F] arrays, or padded [B, T, F] tensors with
-        lengths. Vision keeps its first `config.visual.io` columns (19 paper features)."""
+        lengths, as MTRNN_s and MTRNN_v read them (`somatosensory_inputs`, `visual_inputs`)."""
         p, p_len = somatosensory_inputs(proprioception, self.config, proprioception_lengths)
-        v, v_len = padded(vision, vision_lengths, self.config.visual.io)
+        v, v_len = visual_inputs(vision, self.config, vision_lengths)
         return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
 
     # --- Csc -> utterance -----------------------------------------------------------------------
@@ -269,7 +286,7 @@ class MultiMTRNN(nn.Module):
                 "a timeline needs both on one time grid"
             )
         p, p_len = somatosensory_inputs([proprioception], self.config)
-        v, v_len = pad_sequences([vision], self.config.visual.io)
+        v, v_len = visual_inputs([vision], self.config)
         _, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         _, v_states = self.visual.abstract(v, v_len, return_states=True)
         return s_states[0, :, self.somatosensory.csc_slice], v_states[0, :, self.visual.csc_slice]
@@ -304,7 +321,7 @@ class MultiMTRNN(nn.Module):
     ) -> ActivityTrace:
         """Every layer's activity over time in all three nets for one scene."""
         p, p_len = somatosensory_inputs([proprioception], self.config)
-        v, v_len = pad_sequences([vision], self.config.visual.io)
+        v, v_len = visual_inputs([vision], self.config)
         c_s, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         c_v, v_states = self.visual.abstract(v, v_len, return_states=True)
         c_a = self.assemblies(c_s, c_v)

@@ -16,7 +16,7 @@ from model.config import LEARNING_RULES, MultiMTRNNConfig, TrainingConfig, mode_
 from model.data import SequenceSet
 from model.encoding.utterance import PHONEMES, Lexicon, encode_utterance
 from model.familiarity import Familiarity
-from model.multimtrnn import Description, MultiMTRNN, pad_sequences, somatosensory_inputs
+from model.multimtrnn import Description, MultiMTRNN, somatosensory_inputs, visual_inputs
 from model.training.adaptive_rates import AdaptiveRates
 
 ProgressFn = Callable[[dict], None]
@@ -132,7 +132,7 @@ def encode_utterances(utterances: Sequence[str], steps: int) -> tuple[Tensor, Te
 
 def make_batch(data: SequenceSet, config: MultiMTRNNConfig) -> Batch:
     p, p_len = somatosensory_inputs(data.proprioception, config)
-    v, v_len = pad_sequences(data.vision, config.visual.io)
+    v, v_len = visual_inputs(data.vision, config)
     u, u_len = encode_utterances(data.utterances, config.generation_steps)
     return Batch(p, p_len, v, v_len, u, u_len)
 

@@ -116,6 +116,7 @@ RANGES: dict[str, Range] = {
             "modality_experts",
             "hard_words",
             "vision_centroid",
+            "object_motion",
             "normalise_inputs",
             "factorised_vision",
         ),

@@ -7,9 +7,10 @@ import pytest
 import torch
 
 from model.assemblies import ASSEMBLIES, CellAssemblies
+from model.config import MTRNNConfig
 from model.encoding.utterance import PHONEMES, Lexicon
 from model.mtrnn import scaled_logistic
-from model.multimtrnn import Description, MultiMTRNN, pad_sequences
+from model.multimtrnn import Description, MultiMTRNN, pad_sequences, visual_inputs
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
@@ -58,6 +59,29 @@ def test_vision_uses_only_the_configured_feature_columns(model):
     assert padded.shape == (2, len(v21), 19) and lengths.tolist() == [len(v21), 5]
     with pytest.raises(ValueError, match="features"):
         pad_sequences([v21[:, :10]], 19)
+
+
+def test_object_motion_reads_where_the_object_moved_not_where_it_lies():
+    config = tiny_config()
+    config.visual = MTRNNConfig(io=21, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=16)
+    config.object_motion = True
+    rng = np.random.default_rng(0)
+    a, b = rng.random((9, 21)).astype(np.float32), rng.random((6, 21)).astype(np.float32)
+    moved, lengths = visual_inputs([a, b], config)
+    assert moved.shape == (2, 9, 21) and lengths.tolist() == [9, 6]
+    np.testing.assert_allclose(moved[0, :, :19], a[:, :19])  # the paper's 19 features as they are
+    np.testing.assert_allclose(moved[0, :, 19:], a[:, 19:] - a[0, 19:], atol=1e-6)
+    assert torch.all(moved[0, 0, 19:] == 0) and torch.all(moved[1, 6:] == 0)  # starts at 0; padding stays 0
+    elsewhere = a.copy()
+    elsewhere[:, 19:] += np.float32(0.2)  # the same motion in another part of the frame
+    assert torch.allclose(visual_inputs([elsewhere], config)[0], moved[:1], atol=1e-6)
+    net = MultiMTRNN(config, seed=0)
+    proprioception = tiny_corpus().proprioception[0][:9]
+    c_v = net.abstract([proprioception], [a])[1]
+    assert torch.allclose(c_v, net.abstract([proprioception], [elsewhere])[1])
+    config.visual = MTRNNConfig(io=19, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=16)
+    with pytest.raises(ValueError, match="object_motion needs"):
+        config.__post_init__()
 
 
 def test_describe_returns_text_and_every_csc(model, lexicon):

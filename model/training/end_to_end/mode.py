@@ -142,6 +142,9 @@ def _train(
 ) -> TrainedModel:
     columns = data.vision[0].shape[1]
     config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
+    config.object_motion = options.object_motion
+    if config.object_motion and config.visual.io != 21:
+        raise ValueError(f"object_motion needs the object's centroid among the {columns} vision features")
     if options.hand_path != "joints":
         read_hand_path(config, data, options.hand_path)
     slots = WordSlots.from_utterances(data.utterances)
