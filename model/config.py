@@ -65,6 +65,7 @@ def visual_config(io: int = 19) -> MTRNNConfig:
 
 
 PROPRIOCEPTION_READINGS = ("joints", "joints+hand", "hand")
+OBJECT_MOTION_READERS = ("none", "visual", "somatosensory")
 
 # The learning rules (`model.training.common.make_optimiser`): the paper's adaptive rates times
 # gradients (eqs. 7-10), sign-based RPROP, Adam.
@@ -117,10 +118,12 @@ class MultiMTRNNConfig:
     # hand's path instead), the path read through `arm` (`model.encoding.kinematics.ArmChain.to_dict()`).
     proprioception: Literal["joints", "joints+hand", "hand"] = "joints"
     arm: dict | None = None
-    # What MTRNN_v reads of the object's centroid (`model.multimtrnn.visual_inputs`, end_to_end's
-    # `object_motion`): where it lies in the frame (False), or where it has moved since the first
-    # frame (True: the object's own motion, evidence for the action whatever the workspace).
-    object_motion: bool = False
+    # Which net reads the object's own motion, its centroid relative to the first frame's (evidence
+    # for the action whatever the workspace; end_to_end's `object_motion`): "none" (MTRNN_v reads
+    # where the object lies, if it reads the centroid at all), "visual" (MTRNN_v reads the motion
+    # instead, `model.multimtrnn.visual_inputs`) or "somatosensory" (MTRNN_s reads it beside the
+    # arm, `somatosensory_inputs`).
+    object_motion: Literal["none", "visual", "somatosensory"] = "none"
 
     def __post_init__(self) -> None:
         if self.proprioception not in PROPRIOCEPTION_READINGS:
@@ -129,8 +132,10 @@ class MultiMTRNNConfig:
             )
         if self.proprioception != "joints" and self.arm is None:
             raise ValueError(f"reading {self.proprioception!r} needs the arm's kinematics (`arm`)")
-        if self.object_motion and self.visual.io != WITH_CENTROID:
-            raise ValueError(f"object_motion needs MTRNN_v to read the centroid ({WITH_CENTROID} inputs)")
+        if self.object_motion not in OBJECT_MOTION_READERS:
+            raise ValueError(f"object_motion must be one of {OBJECT_MOTION_READERS}: {self.object_motion!r}")
+        if self.object_motion == "visual" and self.visual.io != WITH_CENTROID:
+            raise ValueError(f"object_motion 'visual' needs MTRNN_v to read {WITH_CENTROID} inputs")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -146,7 +151,7 @@ class MultiMTRNNConfig:
             options=dict(d.get("options") or {}),
             proprioception=d.get("proprioception", "joints"),
             arm=d.get("arm"),
-            object_motion=bool(d.get("object_motion", False)),
+            object_motion=d.get("object_motion", "none"),
         )
 
 

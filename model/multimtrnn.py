@@ -23,6 +23,7 @@ from model.assemblies import CellAssemblies, WordAssemblies
 from model.config import MultiMTRNNConfig
 from model.encoding.kinematics import ArmChain, read_hand_path
 from model.encoding.utterance import Lexicon, decode_text
+from model.encoding.vision import FEATURES as WITH_CENTROID
 from model.encoding.vision import VISUAL_FEATURES
 from model.encoding.words import align
 from model.mtrnn import MTRNN
@@ -39,18 +40,43 @@ def padded(x: Sequence[np.ndarray] | Tensor, lengths: Tensor | None, columns: in
 
 
 def somatosensory_inputs(
-    proprioception: Sequence[np.ndarray] | Tensor, config: MultiMTRNNConfig, lengths: Tensor | None = None
+    proprioception: Sequence[np.ndarray] | Tensor,
+    config: MultiMTRNNConfig,
+    lengths: Tensor | None = None,
+    vision: Sequence[np.ndarray] | Tensor | None = None,
 ) -> tuple[Tensor, Tensor]:
     """What MTRNN_s reads, padded [B, T, io], and the lengths [B], from the joint codes (4.1.1) of a
     list of [T_i, 5] arrays or a padded [B, T, 5] tensor with lengths: by `config.proprioception`
     the codes themselves (the paper), the codes and the hand's path read through `config.arm`
-    (`model.encoding.kinematics`), or the hand's path alone."""
+    (`model.encoding.kinematics`), or the hand's path alone; with `config.object_motion` =
+    "somatosensory" the object's motion (`object_motion`) from `vision` (on the same time grid) after
+    them."""
     arm = None if config.proprioception == "joints" else ArmChain.from_dict(config.arm or {})
-    p, lengths = padded(proprioception, lengths, config.somatosensory.io if arm is None else arm.joints)
-    if arm is None:
+    moving = config.object_motion == "somatosensory"
+    joints = arm.joints if arm is not None else config.somatosensory.io - MOTION_COLUMNS * moving
+    p, lengths = padded(proprioception, lengths, joints)
+    if arm is not None:
+        read = read_hand_path(p, arm)
+        p = read if config.proprioception == "joints+hand" else read[..., arm.joints :]
+    if not moving:
         return p, lengths
-    read = read_hand_path(p, arm)
-    return (read if config.proprioception == "joints+hand" else read[..., arm.joints :]), lengths
+    if vision is None:
+        raise ValueError("this model's MTRNN_s reads the object's motion: it needs the vision features")
+    v, _ = padded(vision, lengths, WITH_CENTROID)
+    if v.shape[1] != p.shape[1]:
+        raise ValueError(f"proprioception has {p.shape[1]} steps and vision {v.shape[1]}: not one time grid")
+    return torch.cat([p, object_motion(v, lengths)], dim=-1), lengths
+
+
+MOTION_COLUMNS = 2  # the object's motion: its centroid's x, y relative to the first frame's
+
+
+def object_motion(vision: Tensor, lengths: Tensor) -> Tensor:
+    """The object's centroid relative to the first frame's, [B, T, 2] (0 after each sequence's end),
+    from padded vision features with the centroid (`model.encoding.vision`): its own motion."""
+    centroid = vision[..., VISUAL_FEATURES : VISUAL_FEATURES + 2]
+    valid = (torch.arange(vision.shape[1])[None, :] < lengths[:, None])[..., None]
+    return (centroid - centroid[:, :1]) * valid
 
 
 def visual_inputs(
@@ -59,14 +85,11 @@ def visual_inputs(
     """What MTRNN_v reads, padded [B, T, io], and the lengths [B], from a list of [T_i, F] vision
     features (`model.encoding.vision`) or a padded [B, T, F] tensor with lengths: the first
     `config.visual.io` (the paper's 19, or with the object's centroid); with `config.object_motion`
-    the centroid is taken relative to the first frame's, the object's own motion."""
+    = "visual" the centroid relative to the first frame's instead (`object_motion`)."""
     v, lengths = padded(vision, lengths, config.visual.io)
-    if not config.object_motion:
+    if config.object_motion != "visual":
         return v, lengths
-    centroid = slice(VISUAL_FEATURES, VISUAL_FEATURES + 2)
-    valid = (torch.arange(v.shape[1])[None, :] < lengths[:, None])[..., None]
-    moved = (v[..., centroid] - v[:, :1, centroid]) * valid
-    return torch.cat([v[..., :VISUAL_FEATURES], moved], dim=-1), lengths
+    return torch.cat([v[..., :VISUAL_FEATURES], object_motion(v, lengths)], dim=-1), lengths
 
 
 @dataclass
@@ -232,7 +255,7 @@ class MultiMTRNN(nn.Module):
     ) -> tuple[Tensor, Tensor]:
         """(c_s,T, c_v,T) [B, csc] from lists of [T_i, F] arrays, or padded [B, T, F] tensors with
         lengths, as MTRNN_s and MTRNN_v read them (`somatosensory_inputs`, `visual_inputs`)."""
-        p, p_len = somatosensory_inputs(proprioception, self.config, proprioception_lengths)
+        p, p_len = somatosensory_inputs(proprioception, self.config, proprioception_lengths, vision)
         v, v_len = visual_inputs(vision, self.config, vision_lengths)
         return self.somatosensory.abstract(p, p_len), self.visual.abstract(v, v_len)
 
@@ -285,7 +308,7 @@ class MultiMTRNN(nn.Module):
                 f"proprioception has {len(proprioception)} steps and vision {len(vision)}: "
                 "a timeline needs both on one time grid"
             )
-        p, p_len = somatosensory_inputs([proprioception], self.config)
+        p, p_len = somatosensory_inputs([proprioception], self.config, vision=[vision])
         v, v_len = visual_inputs([vision], self.config)
         _, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         _, v_states = self.visual.abstract(v, v_len, return_states=True)
@@ -320,7 +343,7 @@ class MultiMTRNN(nn.Module):
         self, proprioception: np.ndarray, vision: np.ndarray, lexicon: Lexicon
     ) -> ActivityTrace:
         """Every layer's activity over time in all three nets for one scene."""
-        p, p_len = somatosensory_inputs([proprioception], self.config)
+        p, p_len = somatosensory_inputs([proprioception], self.config, vision=[vision])
         v, v_len = visual_inputs([vision], self.config)
         c_s, s_states = self.somatosensory.abstract(p, p_len, return_states=True)
         c_v, v_states = self.visual.abstract(v, v_len, return_states=True)

@@ -131,7 +131,7 @@ def encode_utterances(utterances: Sequence[str], steps: int) -> tuple[Tensor, Te
 
 
 def make_batch(data: SequenceSet, config: MultiMTRNNConfig) -> Batch:
-    p, p_len = somatosensory_inputs(data.proprioception, config)
+    p, p_len = somatosensory_inputs(data.proprioception, config, vision=data.vision)
     v, v_len = visual_inputs(data.vision, config)
     u, u_len = encode_utterances(data.utterances, config.generation_steps)
     return Batch(p, p_len, v, v_len, u, u_len)

@@ -20,7 +20,13 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-from model.config import LEARNING_RULES, PROPRIOCEPTION_READINGS, MultiMTRNNConfig, mode_options
+from model.config import (
+    LEARNING_RULES,
+    OBJECT_MOTION_READERS,
+    PROPRIOCEPTION_READINGS,
+    MultiMTRNNConfig,
+    mode_options,
+)
 from model.experiments.protocol import apply_overrides, default_config
 from model.experiments.splits import SPLITS, SQUARE_FOLDS
 from model.training.end_to_end.options import EndToEndOptions
@@ -116,7 +122,6 @@ RANGES: dict[str, Range] = {
             "modality_experts",
             "hard_words",
             "vision_centroid",
-            "object_motion",
             "normalise_inputs",
             "factorised_vision",
         ),
@@ -132,6 +137,7 @@ RANGES: dict[str, Range] = {
     **dict.fromkeys(("recombine", "recombine_objects"), _floats(0, 100)),
     "recombine_pairs": _ints(0, 16),
     "hand_path": Range(str, choices=PROPRIOCEPTION_READINGS),
+    "object_motion": Range(str, choices=OBJECT_MOTION_READERS),
     **dict.fromkeys(("auditory_epochs", "perception_epochs"), EPOCHS),
     **dict.fromkeys(("auditory_check_every", "joint_epochs"), _ints(0, MAX_EPOCHS)),
     "auditory_attempts": _ints(1, 10),

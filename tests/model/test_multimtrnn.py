@@ -10,7 +10,7 @@ from model.assemblies import ASSEMBLIES, CellAssemblies
 from model.config import MTRNNConfig
 from model.encoding.utterance import PHONEMES, Lexicon
 from model.mtrnn import scaled_logistic
-from model.multimtrnn import Description, MultiMTRNN, pad_sequences, visual_inputs
+from model.multimtrnn import Description, MultiMTRNN, pad_sequences, somatosensory_inputs, visual_inputs
 from tests.model.tiny_corpus import tiny_config, tiny_corpus
 
 
@@ -64,7 +64,7 @@ def test_vision_uses_only_the_configured_feature_columns(model):
 def test_object_motion_reads_where_the_object_moved_not_where_it_lies():
     config = tiny_config()
     config.visual = MTRNNConfig(io=21, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=16)
-    config.object_motion = True
+    config.object_motion = "visual"
     rng = np.random.default_rng(0)
     a, b = rng.random((9, 21)).astype(np.float32), rng.random((6, 21)).astype(np.float32)
     moved, lengths = visual_inputs([a, b], config)
@@ -80,7 +80,32 @@ def test_object_motion_reads_where_the_object_moved_not_where_it_lies():
     c_v = net.abstract([proprioception], [a])[1]
     assert torch.allclose(c_v, net.abstract([proprioception], [elsewhere])[1])
     config.visual = MTRNNConfig(io=19, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=16)
-    with pytest.raises(ValueError, match="object_motion needs"):
+    with pytest.raises(ValueError, match="object_motion 'visual' needs"):
+        config.__post_init__()
+
+
+def test_mtrnn_s_can_read_the_object_motion_beside_the_arm():
+    config = tiny_config()
+    config.somatosensory = MTRNNConfig(io=7, cf=6, cs=4, tau_io=2, tau_cf=5, tau_cs=50)
+    config.object_motion = "somatosensory"
+    data = tiny_corpus()
+    p, v = data.proprioception[:2], data.vision[:2]
+    inputs, lengths = somatosensory_inputs(p, config, vision=v)
+    assert inputs.shape == (2, max(len(x) for x in p), 7) and lengths.tolist() == [len(x) for x in p]
+    np.testing.assert_allclose(inputs[0, : len(p[0]), :5], p[0])
+    np.testing.assert_allclose(inputs[0, : len(p[0]), 5:], v[0][:, 19:] - v[0][0, 19:], atol=1e-6)
+    net = MultiMTRNN(config, seed=0)
+    still = [x.copy() for x in v]
+    still[0][:, 19:] = still[0][0, 19:]  # the object does not move: only MTRNN_s's reading changes
+    (c_s, c_v), (c_s_still, c_v_still) = net.abstract(p, v), net.abstract(p, still)
+    assert not torch.allclose(c_s[0], c_s_still[0]) and torch.allclose(c_s[1], c_s_still[1])
+    assert torch.equal(c_v, c_v_still)  # this MTRNN_v reads the paper's 19 features
+    with pytest.raises(ValueError, match="needs the vision features"):
+        somatosensory_inputs(p, config)
+    with pytest.raises(ValueError, match="one time grid"):
+        somatosensory_inputs(p[:1], config, vision=[v[0][:-2]])
+    config.object_motion = "elsewhere"
+    with pytest.raises(ValueError, match="object_motion must be one of"):
         config.__post_init__()
 
 

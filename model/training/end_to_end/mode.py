@@ -69,7 +69,8 @@ from model.assemblies import WordAssemblies
 from model.config import MultiMTRNNConfig
 from model.data import SequenceSet
 from model.encoding.kinematics import HAND_PATH_COLUMNS, ArmChain
-from model.multimtrnn import MultiMTRNN
+from model.encoding.vision import FEATURES as WITH_CENTROID
+from model.multimtrnn import MOTION_COLUMNS, MultiMTRNN
 from model.training.common import (
     MultiMTRNNMode,
     ProgressFn,
@@ -141,12 +142,14 @@ def _train(
     options: EndToEndOptions,
 ) -> TrainedModel:
     columns = data.vision[0].shape[1]
-    config.visual = replace(config.visual, io=min(columns, 21) if options.vision_centroid else 19)
-    config.object_motion = options.object_motion
-    if config.object_motion and config.visual.io != 21:
+    config.visual = replace(config.visual, io=min(columns, WITH_CENTROID) if options.vision_centroid else 19)
+    if options.object_motion != "none" and columns < WITH_CENTROID:
         raise ValueError(f"object_motion needs the object's centroid among the {columns} vision features")
+    config.object_motion = options.object_motion
     if options.hand_path != "joints":
         read_hand_path(config, data, options.hand_path)
+    if options.object_motion == "somatosensory":
+        config.somatosensory = replace(config.somatosensory, io=config.somatosensory.io + MOTION_COLUMNS)
     slots = WordSlots.from_utterances(data.utterances)
     factors = object_factors(data, slots, options)
     assemblies = word_assemblies(config, slots, options, seed, factors)

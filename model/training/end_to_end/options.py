@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from model.config import PROPRIOCEPTION_READINGS
+from model.config import OBJECT_MOTION_READERS, PROPRIOCEPTION_READINGS
 
 
 @dataclass
@@ -19,9 +19,10 @@ class EndToEndOptions:
     modality_experts: bool = False  # each encoder's word units learn alone; eq. (17) sums them
     hard_words: bool = True  # winner-take-all word units when describing
     vision_centroid: bool = True  # MTRNN_v also reads the object's centroid (21 inputs, not 19)
-    # ... relative to the first frame's: the object's own motion, evidence for the action in any
-    # workspace (issue 12, docs/experiments/cross_setup.md)
-    object_motion: bool = False
+    # which net reads the object's own motion (its centroid relative to the first frame's), evidence
+    # for the action in any workspace: "none", "visual" (instead of where it lies) or "somatosensory"
+    # (beside the arm) (issue 12, docs/experiments/cross_setup.md)
+    object_motion: str = "none"
     # MTRNN_s reads the joint codes ("joints", the paper's), the hand's path in the torso frame beside
     # them ("joints+hand") or instead ("hand"), by the arm's forward kinematics (issue 12,
     # docs/experiments/cross_setup.md: "hand" reads held-out setups' actions at 0.74, the codes 0.54)
@@ -47,8 +48,10 @@ class EndToEndOptions:
     def __post_init__(self) -> None:
         if self.hand_path not in PROPRIOCEPTION_READINGS:
             raise ValueError(f"hand_path must be one of {PROPRIOCEPTION_READINGS}, got {self.hand_path!r}")
-        if self.object_motion and not self.vision_centroid:
-            raise ValueError("object_motion needs vision_centroid (the motion is the centroid's)")
+        if self.object_motion not in OBJECT_MOTION_READERS:
+            raise ValueError(f"object_motion must be one of {OBJECT_MOTION_READERS}: {self.object_motion!r}")
+        if self.object_motion == "visual" and not self.vision_centroid:
+            raise ValueError("object_motion 'visual' needs vision_centroid (the motion is the centroid's)")
         if self.average_from > 0 and self.selection_scenes > 0:
             raise ValueError("average_from needs selection_scenes = 0 (the average is the final state)")
         if self.recombine > 0 and not self.slot_softmax:

@@ -300,22 +300,28 @@ def test_hand_path_reads_the_arm_the_recordings_came_from_and_checkpoints_it(tmp
         np.testing.assert_array_equal(b.csc_s, a.csc_s)
 
 
-def test_object_motion_is_checkpointed_and_described_the_same_after_loading(tmp_path) -> None:
+@pytest.mark.parametrize("reader, io_s", [("visual", 6), ("somatosensory", 8)])
+def test_object_motion_is_checkpointed_and_described_the_same_after_loading(tmp_path, reader, io_s) -> None:
     data = tiny_corpus(variants=1)
-    options = replace(_tiny_options(), object_motion=True, selection_scenes=0)
+    options = replace(_tiny_options(), hand_path="hand", object_motion=reader, selection_scenes=0)
     trained = train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
-    assert trained.model.config.object_motion and trained.meta["end_to_end"]["object_motion"]
+    config = trained.model.config
+    assert (config.object_motion, config.somatosensory.io, config.visual.io) == (reader, io_s, 21)
+    assert trained.meta["end_to_end"]["object_motion"] == reader
     before = trained.model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
     checkpoint.save(trained.model, tmp_path / "m", trained.meta)
     model, _ = checkpoint.load(tmp_path / "m")
-    assert model.config.object_motion
+    assert model.config.object_motion == reader
     after = model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
     for b, a in zip(before, after, strict=True):
+        np.testing.assert_array_equal(b.csc_s, a.csc_s)
         np.testing.assert_array_equal(b.csc_v, a.csc_v)
     timeline = model.timeline(data.proprioception[0], data.vision[0], trained.lexicon)
     assert timeline.texts[-1] == after[0].text
-    with pytest.raises(ValueError, match="object_motion needs vision_centroid"):
-        EndToEndOptions(object_motion=True, vision_centroid=False)
+    with pytest.raises(ValueError, match="needs vision_centroid"):
+        EndToEndOptions(object_motion="visual", vision_centroid=False)
+    with pytest.raises(ValueError, match="object_motion must be one of"):
+        EndToEndOptions(object_motion="both")
 
 
 def test_hand_path_needs_the_arm_of_the_recordings() -> None:
