@@ -40,11 +40,14 @@ def _hand_path(entry: Any) -> np.ndarray:
     return 100.0 * (hand - hand[0])
 
 
-def _reads(served: LoadedModel) -> str:
-    """What the served model's MTRNN_s reads: its config's `proprioception` ("joints", "joints+hand"
-    or "hand"); a model without a MultiMTRNN config (the peer baseline) reads the joint codes."""
+def _reads(served: LoadedModel) -> tuple[str, str]:
+    """What the served model's MTRNN_s reads, its config's `proprioception` ("joints", "joints+hand"
+    or "hand"), and which net also reads the object's motion (`object_motion`); a model without a
+    MultiMTRNN config (the peer baseline) reads the joint codes and no motion."""
     config = getattr(served.model, "config", None)
-    return config.proprioception if isinstance(config, MultiMTRNNConfig) else "joints"
+    if not isinstance(config, MultiMTRNNConfig):
+        return "joints", "none"
+    return config.proprioception, config.object_motion
 
 
 def _find(corpus: Corpus, action: str, colour: str, shape: str) -> Any | None:
@@ -117,11 +120,13 @@ def feeling(corpus: Corpus, surveys: SurveyService, action: str, colour: str) ->
     ]
     if not series:
         raise NotFound(f"the corpus has no '{action}' on a {colour} object")
+    reads, object_motion = _reads(surveys.models.served)
     return {
         "action": action,
         "colour": colour,
         "joint_names": list(JOINT_NAMES),
-        "reads": _reads(surveys.models.served),
+        "reads": reads,
+        "object_motion": object_motion,
         "series": series,
         "comparison": _comparison(corpus, surveys, action),
     }

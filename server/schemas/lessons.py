@@ -97,6 +97,9 @@ class Feeling(BaseModel):
     reads: Literal["joints", "joints+hand", "hand"] = Field(
         description="what the served model's MTRNN_s reads (MultiMTRNNConfig.proprioception)"
     )
+    object_motion: Literal["none", "visual", "somatosensory"] = Field(
+        description="which net also reads the object's motion in the image (MultiMTRNNConfig.object_motion)"
+    )
     series: list[dict[str, Any]]
     comparison: dict[str, Any] | None
 

@@ -357,6 +357,7 @@ def test_generalising_an_unknown_model_is_404(client: TestClient) -> None:
 def test_feeling_gives_each_hand_path_in_cm_and_what_the_served_model_reads(client: TestClient) -> None:
     body = client.get("/api/lessons/feeling", params={"action": "slide", "colour": "red"}).json()
     assert body["reads"] in ("joints", "joints+hand", "hand")
+    assert body["object_motion"] in ("none", "visual", "somatosensory")
     for s in body["series"]:
         path = np.asarray(s["hand_path"])
         assert path.shape == (3, len(s["proprioception"][0]))

@@ -22,6 +22,11 @@ const READS = {
   "joints+hand": "The served model's MTRNN_s reads the joint angles and, beside them, this hand path (option hand_path = joints+hand).",
   hand: "The served model's MTRNN_s reads this hand path instead of the joint angles (option hand_path = hand).",
 };
+const MOTION = {
+  none: "",
+  visual: " Its MTRNN_v reads the object's motion in the image (its centroid relative to the first frame's) instead of where the object lies (option object_motion = visual).",
+  somatosensory: " Beside it, MTRNN_s reads the object's motion in the image (its centroid relative to the first frame's): a pull brings the object nearer, a push sends it away, whatever the arm's posture (option object_motion = somatosensory).",
+};
 
 const axis = (k) => (k ? String(k + 1) : "");
 
@@ -126,7 +131,7 @@ export async function render(root, ctx) {
       stackedLayout(`joint angles of ${what} (scaled to 0-1 by the joint limits)`, joints));
     chart(handPlot, stackedTraces(data.series, "hand_path", HAND_AXES.length),
       stackedLayout(`hand path of ${what} (cm from where the hand started, torso frame)`, HAND_AXES));
-    readsNote.textContent = READS[data.reads];
+    readsNote.textContent = READS[data.reads] + MOTION[data.object_motion];
     const longest = Math.max(...data.series.map((s) => (s.proprioception[0].length - 1) / s.fps));
     time.max = longest.toFixed(2);
     drawCursor();
