@@ -196,10 +196,27 @@ def _by_value(runs: Sequence[RunRecord], param: str) -> list[tuple[float, list[R
 
 
 def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list[dict[str, Any]]:
-    """Per psi_s: mean and standard error over runs of the Fig. 9 (a-d) measures."""
+    """Per psi_s: mean and standard error over runs of the Fig. 9 (a-d) measures, their seconds, and
+    for psi_s > 0 the paired difference of the novel scenes' sentence exact and phoneme F1 to psi_s = 0
+    on the same (fold, init) (mean, standard error, p of the paired t-test, as the paper's 4.3:
+    "test_sentence_exact_vs_0", "..._sem", "..._p")."""
+    groups = _by_value(runs, "psi_s")
+    baseline = {(r.fold, r.init): r for r in dict(groups).get(0.0, [])}
     rows = []
-    for value, group in _by_value(runs, "psi_s"):
-        row: dict[str, Any] = {"psi_s": value, "runs": len(group)}
+    for value, group in groups:
+        row: dict[str, Any] = {
+            "psi_s": value,
+            "runs": len(group),
+            "seconds": sum(r.seconds or 0.0 for r in group),
+        }
+        paired = [r for r in group if (r.fold, r.init) in baseline]
+        if value != 0.0 and paired:
+            for label, name in (("test_sentence_exact", "sentence_exact"), ("test_f1", "f1")):
+                diff, sem, n, p = paired_difference(
+                    [_metric(r, "test", name) for r in paired],
+                    [_metric(baseline[(r.fold, r.init)], "test", name) for r in paired],
+                )
+                row[f"{label}_vs_0"], row[f"{label}_vs_0_sem"], row[f"{label}_vs_0_p"] = diff, sem, p
         for label, split, name in (
             ("mixed_f1", "mixed", "f1"),
             ("mixed_edit_distance", "mixed", "edit_distance"),

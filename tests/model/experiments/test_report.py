@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from model.experiments.report import PAPER, build_report
+from model.experiments.report import PAPER, build_report, prose
 from model.experiments.runstore import RunSpec, RunStore
 
 
@@ -53,8 +53,12 @@ def test_the_report_puts_our_numbers_beside_the_papers_and_explains_each_differe
     assert "| test F1 (best run) | 0.638 | 0.3000 | 0.9500 |" in text
     assert "faithful test: F1 0.250 (0.031 worse than the paper's 0.281)" in text
     assert "end_to_end test: F1 0.925 (0.644 better than the paper's 0.281)" in text
-    # one sentence per (mode, split), each cause said once, however many measures differ
-    assert text.count("most likely because") == 4
+    # one sentence per (mode, split) naming its causes by number; each cause is written out once
+    assert "faithful train: F1 0.850 (0.102 worse than the paper's 0.952)" in text
+    causes = text.split("Why, each cause once:")[1].split("\n\n")[1].splitlines()
+    assert [c.split(". ")[0] for c in causes] == [str(n) for n in range(1, len(causes) + 1)]
+    assert len(set(causes)) == len(causes) and "The faithful runs used another epoch budget" in text
+    assert text.count(prose.CAUSES["end_to_end"]) == 1  # end_to_end train and test share it
     assert "edit distance 0.000 (within 0.02 of the paper's 0.0185)" in text
     assert "| 0.0005 | 0.600 |" in text  # psi_s table: mixed F1 at 5e-4
     assert "best psi_s by mixed F1 is 0.0005" in text
@@ -121,3 +125,35 @@ def test_each_harder_split_gets_its_table_and_the_size_curve_its_figure(tmp_path
     assert [p["train_scenes"] for p in data["size_curve"]["end_to_end"]] == [8, 16, 48]
     assert set(data["splits"]["objects"]) == {"end_to_end", "peer"}
     assert data["modes"]["end_to_end"]["runs"] == 2  # the paper's split's runs only
+
+
+def _psi_s_store(tmp_path, gains: dict[int, float]) -> RunStore:
+    """psi_s 0 and 5e-4 on folds 0-2: 5e-4's novel-scene numbers higher by gains[fold]."""
+    store = RunStore(tmp_path / "runs")
+    for psi in (0.0, 5e-4):
+        for fold, gain in gains.items():
+            spec = RunSpec(
+                "psi_s", "faithful", fold, 0, fold, {"training": {"psi_s": psi}}, {"psi_s": psi}, "d"
+            )
+            store.register([spec])
+            store.finish(spec.key, _metrics(0.8, 0.3 + (gain if psi else 0.0)), 10.0)
+    return store
+
+
+def test_the_psi_s_section_tests_the_papers_best_value_against_none_paired_by_fold_and_init(tmp_path) -> None:
+    out = tmp_path / "R.md"
+    build_report(_psi_s_store(tmp_path, {0: 0.1, 1: 0.2, 2: 0.3}), out, tmp_path / "figures")
+    text = out.read_text()
+    ttest = text.split("### psi_s = 0 against psi_s = 0.0005 (t-test)")[1]
+    # sentence exact is f1 / 2 in _metrics: +0.05, +0.10, +0.15, paired t = 3.46 on 2 df
+    assert "(3 pairs)" in ttest and "sentence exact +0.100 +- 0.029 (p = 0.074)" in ttest
+    assert "phoneme F1 +0.200 +- 0.058 (p = 0.074)" in ttest
+    assert "| 0.0005 |" in text and "| 0.5 min |" in text  # 3 runs of 10 s of worker time
+
+
+def test_a_forcing_that_changes_nothing_says_the_t_test_is_undefined(tmp_path) -> None:
+    out = tmp_path / "R.md"
+    build_report(_psi_s_store(tmp_path, {0: 0.0, 1: 0.0}), out, tmp_path / "figures")
+    assert "sentence exact +0.000 and phoneme F1 +0.000 in every pair, so the paired t-test is undefined" in (
+        out.read_text()
+    )
