@@ -176,14 +176,17 @@ def psi_s(page: Page, store: RunStore, data: Any | None) -> None:
     for r in table:
         page.md.append(
             f"| {r['psi_s']:g} | "
-            + " | ".join(fmt(r[k], r[f"{k}_sem"]) for k in PSI_S_COLUMNS)
+            + " | ".join(
+                fmt(r[k], r[f"{k}_sem"], _digits(table, k) if k.startswith("d_") else 3)
+                for k in PSI_S_COLUMNS
+            )
             + f" | {r['seconds'] / 60:.1f} min |"
         )
     page.md += [
         "",
         page.image("Fig. 9", path),
         "",
-        f"Our best psi_s by mixed F1 is {best['psi_s']:g} (paper: 5e-4). " + prose.psi_sentence(table),
+        prose.best_psi_s(table, best) + " " + prose.psi_sentence(table),
         "",
     ]
     paper_best = next((r for r in table if r["psi_s"] == PAPER_BEST_PSI_S), None)
@@ -196,6 +199,15 @@ def psi_s(page: Page, store: RunStore, data: Any | None) -> None:
         ]
     if data is not None:
         _psi_s_pca(page, psi_runs, table, best["psi_s"], data)
+
+
+def _digits(table: list[dict], column: str) -> int:
+    """Decimals that show a psi_s table column's values with three significant digits (the Csc
+    distances of small codes are ~0.01)."""
+    largest = max(
+        (abs(r[column]) for r in table if r[column] is not None and math.isfinite(r[column])), default=1.0
+    )
+    return 3 if largest >= 0.1 else min(6, 2 - math.floor(math.log10(largest or 1e-6)))
 
 
 def _psi_s_pca(page: Page, psi_runs: list[RunRecord], table: list[dict], best: float, data: Any) -> None:
