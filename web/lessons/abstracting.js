@@ -140,9 +140,11 @@ export async function render(root, ctx) {
     const curve = (el, rows, xKey, name, title) => chart(el, [{ name,
       x: rows.map((r) => r[xKey] || 1e-6), y: rows.map((r) => r[name]), mode: "lines+markers",
       error_y: { type: "data", array: rows.map((r) => r[`${name}_sem`] ?? 0) } }],
-    { title: { text: title, font: { size: 13 } }, xaxis: { title: xKey === "psi" ? "ψ (0 drawn at 1e-6)" : "ψ_s", type: "log" }, yaxis: { title: name } });
+    { title: { text: title, font: { size: 13 } }, xaxis: { title: `${xKey === "psi" ? "ψ" : "ψ_s"}${rows.some((r) => !r[xKey]) ? " (0 drawn at 1e-6)" : ""}`, type: "log" }, yaxis: { title: name } });
     if (sweep.psi_s.length) {
-      const names = Object.keys(sweep.psi_s[0]).filter((k) => !k.endsWith("_sem") && k !== "psi_s" && k !== "runs");
+      // the measures with a standard error (not the paired comparisons with psi_s = 0)
+      const row = sweep.psi_s[0];
+      const names = Object.keys(row).filter((k) => `${k}_sem` in row && !k.includes("_vs_0"));
       const wanted = names.includes(ctx.params.metric) ? ctx.params.metric : names[0];
       const pick = select("sweep-metric", names, wanted);
       const sweepPlot = h("div", { class: "plot", id: "sweep-plot", style: "height:300px" });

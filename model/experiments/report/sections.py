@@ -143,7 +143,8 @@ def _beside_the_paper(page: Page, evaluate: dict[str, list[RunRecord]], summarie
             sentence, keys = prose.comparison(m, split, values, optimiser, cut)
             causes += [k for k in keys if k not in causes]
             refs = ", ".join(str(causes.index(k) + 1) for k in keys)
-            page.md.append(f"- {sentence}" + (f": causes {refs}." if refs else "."))
+            named = f": {'causes' if len(keys) > 1 else 'cause'} {refs}." if keys else "."
+            page.md.append(f"- {sentence}{named}")
     if causes:
         page.md += ["", "Why, each cause once:", ""]
         page.md += [f"{n}. {prose.CAUSES[k]}" for n, k in enumerate(causes, start=1)]
