@@ -4,6 +4,7 @@ normalisation, held-out calibration and a whole (tiny) training that checkpoints
 from __future__ import annotations
 
 from dataclasses import asdict, replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,9 +15,11 @@ from data.scenario import all_scenes
 from model import checkpoint
 from model.assemblies import ASSEMBLIES, WordAssemblies
 from model.config import MTRNNConfig
+from model.data import SequenceSet
 from model.encoding.utterance import Lexicon
+from model.multimtrnn import Description, MultiMTRNN
 from model.training import MODES
-from model.training.common import encode_utterances, prepare
+from model.training.common import TrainedModel, encode_utterances, prepare
 from model.training.end_to_end import (
     EndToEndOptions,
     InputNormaliser,
@@ -285,19 +288,29 @@ def test_plain_end_to_end_trains_everything_through_the_auditory_loss() -> None:
 @pytest.mark.parametrize("reading, io", [("joints", 5), ("joints+hand", 11), ("hand", 6)])
 def test_hand_path_reads_the_arm_the_recordings_came_from_and_checkpoints_it(tmp_path, reading, io) -> None:
     data = tiny_corpus(variants=1)
-    options = replace(_tiny_options(), hand_path=reading, selection_scenes=0)
+    options = replace(_tiny_options(), hand_path=reading, object_motion="none", selection_scenes=0)
     trained = train_end_to_end(data, prepare(data, tiny_config()), seed=1, options=options)
     config = trained.model.config
     arm = None if reading == "joints" else data.arm  # the paper's codes need no kinematics
     assert (config.somatosensory.io, config.proprioception, config.arm) == (io, reading, arm)
+    model, _ = _describes_the_same_after_loading(trained, data, tmp_path)
+    assert model.config.proprioception == reading
+
+
+def _describes_the_same_after_loading(
+    trained: TrainedModel, data: SequenceSet, tmp_path: Path
+) -> tuple[MultiMTRNN, list[Description]]:
+    """Save and load `trained`'s model: the first two recordings' activity and Csc states are
+    bitwise the same; (loaded model, its descriptions)."""
     before = trained.model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
     checkpoint.save(trained.model, tmp_path / "m", trained.meta)
     model, _ = checkpoint.load(tmp_path / "m")
-    assert model.config.proprioception == reading
     after = model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
     for b, a in zip(before, after, strict=True):
         np.testing.assert_array_equal(b.activity, a.activity)
         np.testing.assert_array_equal(b.csc_s, a.csc_s)
+        np.testing.assert_array_equal(b.csc_v, a.csc_v)
+    return model, after
 
 
 @pytest.mark.parametrize("reader, io_s", [("visual", 6), ("somatosensory", 8)])
@@ -308,14 +321,8 @@ def test_object_motion_is_checkpointed_and_described_the_same_after_loading(tmp_
     config = trained.model.config
     assert (config.object_motion, config.somatosensory.io, config.visual.io) == (reader, io_s, 21)
     assert trained.meta["end_to_end"]["object_motion"] == reader
-    before = trained.model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
-    checkpoint.save(trained.model, tmp_path / "m", trained.meta)
-    model, _ = checkpoint.load(tmp_path / "m")
+    model, after = _describes_the_same_after_loading(trained, data, tmp_path)
     assert model.config.object_motion == reader
-    after = model.describe_batch(data.proprioception[:2], data.vision[:2], trained.lexicon)
-    for b, a in zip(before, after, strict=True):
-        np.testing.assert_array_equal(b.csc_s, a.csc_s)
-        np.testing.assert_array_equal(b.csc_v, a.csc_v)
     timeline = model.timeline(data.proprioception[0], data.vision[0], trained.lexicon)
     assert timeline.texts[-1] == after[0].text
     with pytest.raises(ValueError, match="needs vision_centroid"):
