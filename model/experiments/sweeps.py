@@ -195,6 +195,19 @@ def _by_value(runs: Sequence[RunRecord], param: str) -> list[tuple[float, list[R
     return sorted(groups.items())
 
 
+def _versus_zero(
+    row: dict[str, Any], pairs: Sequence[tuple[RunRecord, RunRecord]], split: str, measures: Mapping[str, str]
+) -> None:
+    """Into `row`, for each (label, metric) of `measures`: the mean and standard error of the paired
+    difference (run - its run without forcing) and the paired t-test's p, as "<label>_vs_0",
+    "<label>_vs_0_sem", "<label>_vs_0_p"."""
+    for label, name in measures.items():
+        diff, sem, _, p = paired_difference(
+            [_metric(r, split, name) for r, _ in pairs], [_metric(b, split, name) for _, b in pairs]
+        )
+        row[f"{label}_vs_0"], row[f"{label}_vs_0_sem"], row[f"{label}_vs_0_p"] = diff, sem, p
+
+
 def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list[dict[str, Any]]:
     """Per psi_s: mean and standard error over runs of the Fig. 9 (a-d) measures, their seconds, and
     for psi_s > 0 the paired difference of the novel scenes' sentence exact and phoneme F1 to psi_s = 0
@@ -209,14 +222,9 @@ def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list
             "runs": len(group),
             "seconds": sum(r.seconds or 0.0 for r in group),
         }
-        paired = [r for r in group if (r.fold, r.init) in baseline]
-        if value != 0.0 and paired:
-            for label, name in (("test_sentence_exact", "sentence_exact"), ("test_f1", "f1")):
-                diff, sem, n, p = paired_difference(
-                    [_metric(r, "test", name) for r in paired],
-                    [_metric(baseline[(r.fold, r.init)], "test", name) for r in paired],
-                )
-                row[f"{label}_vs_0"], row[f"{label}_vs_0_sem"], row[f"{label}_vs_0_p"] = diff, sem, p
+        pairs = [(r, baseline[(r.fold, r.init)]) for r in group if (r.fold, r.init) in baseline]
+        if value != 0.0 and pairs:
+            _versus_zero(row, pairs, "test", {"test_sentence_exact": "sentence_exact", "test_f1": "f1"})
         for label, split, name in (
             ("mixed_f1", "mixed", "f1"),
             ("mixed_edit_distance", "mixed", "edit_distance"),
@@ -261,13 +269,8 @@ def cosine_table(runs: Sequence[RunRecord], rule: tuple[str, float] | None = Non
             mean, sem, n = mean_sem([_metric(r, "cosine", name) for r in group])
             if n:
                 row[name], row[f"{name}_sem"] = mean, sem
-        paired = [r for r in group if r.seed in baseline]
-        if value != 0.0 and paired:  # the same seeds without forcing: differences and a paired t-test
-            for name in ("d_avg", "d_rel"):
-                diff, sem, n, p = paired_difference(
-                    [_metric(r, "cosine", name) for r in paired],
-                    [_metric(baseline[r.seed], "cosine", name) for r in paired],
-                )
-                row[f"{name}_vs_0"], row[f"{name}_vs_0_sem"], row[f"{name}_vs_0_p"] = diff, sem, p
+        pairs = [(r, baseline[r.seed]) for r in group if r.seed in baseline]
+        if value != 0.0 and pairs:  # the same seeds without forcing: differences and a paired t-test
+            _versus_zero(row, pairs, "cosine", {"d_avg": "d_avg", "d_rel": "d_rel"})
         rows.append(row)
     return rows
