@@ -199,13 +199,14 @@ def _versus_zero(
     row: dict[str, Any], pairs: Sequence[tuple[RunRecord, RunRecord]], split: str, measures: Mapping[str, str]
 ) -> None:
     """Into `row`, for each (label, metric) of `measures`: the mean and standard error of the paired
-    difference (run - its run without forcing) and the paired t-test's p, as "<label>_vs_0",
-    "<label>_vs_0_sem", "<label>_vs_0_p"."""
+    difference (run - its run without forcing), the paired t-test's p and the pairs it counted, as
+    "<label>_vs_0", "<label>_vs_0_sem", "<label>_vs_0_p", "<label>_vs_0_n"."""
     for label, name in measures.items():
-        diff, sem, _, p = paired_difference(
+        diff, sem, n, p = paired_difference(
             [_metric(r, split, name) for r, _ in pairs], [_metric(b, split, name) for _, b in pairs]
         )
         row[f"{label}_vs_0"], row[f"{label}_vs_0_sem"], row[f"{label}_vs_0_p"] = diff, sem, p
+        row[f"{label}_vs_0_n"] = n
 
 
 def psi_s_table(runs: Sequence[RunRecord], space: str = CSC_SPACE_SWEPT) -> list[dict[str, Any]]:

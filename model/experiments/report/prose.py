@@ -8,12 +8,11 @@ import math
 NAMES = {"f1": "F1", "edit_distance": "edit distance"}
 
 
-CORPUS = (
-    "Our corpus (simulated teachers, rendered frames) is more regular than the NAO recordings, so the "
-    "perception codes carry the scene more clearly; phoneme F1 also credits partly right sentences."
-)
 CAUSES = {
-    "corpus": CORPUS,
+    "corpus": (
+        "Our corpus (simulated teachers, rendered frames) is more regular than the NAO recordings, so the "
+        "perception codes carry the scene more clearly; phoneme F1 also credits partly right sentences."
+    ),
     "budget": "The faithful runs used another epoch budget than Table 1's (listed above).",
     "faithful_encoders": (
         "Under the paper's rule the training scenes are lost in the encoders: at Table 1's 400 encoder "
@@ -125,7 +124,8 @@ def psi_s_ttest(row: dict) -> str:
     )
     f1 = row["test_f1_vs_0"], row["test_f1_vs_0_sem"], row["test_f1_vs_0_p"]
     value = f"psi_s = {row['psi_s']:g}"
-    head = f"{value} against psi_s = 0 on the same folds and inits ({row['runs']} pairs), novel scenes: "
+    pairs = row["test_sentence_exact_vs_0_n"]
+    head = f"{value} against psi_s = 0 on the same folds and inits ({pairs} pairs), novel scenes: "
     paper = ' The paper: p < 0.001, "the rate of successfully described novel scenes nearly doubled".'
     if exact[1] == 0 and f1[1] == 0:
         return (
